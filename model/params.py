@@ -1,0 +1,605 @@
+"""Parameter objects of the vehicle–track–tunnel–soil model.
+
+The single source of truth for defaults, physical bounds, slider ranges (``softbounds``), units
+(in each ``label``) and derived quantities. Defaults follow ``shared/MODEL.md``: the paper's
+Tables 1, 3 and 4 where they are usable, stated assumptions where the paper is silent (its
+Table 2 is missing). Every value is SI except ``Train.speed_kmh``.
+
+A bad value is refused at assignment with a message that names the parameter, the value and
+the allowed range; constraints between parameters are checked by :meth:`Scenario.validate`
+before any computation.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import param
+
+GRAVITY = 9.81  # m/s², standard value used for static loads
+ASSETS_DIR = Path(__file__).resolve().parent.parent / "assets"
+PRESETS_FILE = ASSETS_DIR / "presets.json"
+
+# Hertz contact constant G = a R^b × 1e-8 m/N^(2/3) (Zhai's empirical fits), by wheel tread type.
+HERTZ_FITS = {"conical": (4.57, -0.149), "worn": (3.86, -0.115)}
+
+# FRA vertical-profile roughness parameter A_v in cm²·rad/m for track classes 1–6.
+FRA_ROUGHNESS_CM2_RAD_PER_M = {1: 1.2107, 2: 1.0181, 3: 0.6816, 4: 0.5376, 5: 0.2095, 6: 0.0339}
+
+
+class ScenarioError(ValueError):
+    """Raised when parameter values are individually valid but inconsistent with each other."""
+
+
+def _format_range(bounds, inclusive) -> str:
+    low, high = bounds
+    left = "[" if inclusive[0] else "("
+    right = "]" if inclusive[1] else ")"
+    low_s = "-inf" if low is None else f"{low:g}"
+    high_s = "inf" if high is None else f"{high:g}"
+    return f"{left}{low_s}, {high_s}{right}"
+
+
+class _RangeMessage:
+    """Mixin: a bounds violation names the parameter, the value, the allowed range and the unit."""
+
+    def _validate_bounds(self, val, bounds, inclusive_bounds):
+        try:
+            super()._validate_bounds(val, bounds, inclusive_bounds)
+        except ValueError:
+            owner = getattr(self.owner, "name", None) if self.owner is not None else None
+            where = f"{type(self.owner).__name__}.{self.name}" if owner else self.name
+            raise ValueError(
+                f"{where} = {val!r} is outside the allowed range "
+                f"{_format_range(bounds, inclusive_bounds)} ({self.label})"
+            ) from None
+
+
+class Quantity(_RangeMessage, param.Number):
+    """A real physical quantity with bounds; NaN is always refused."""
+
+
+class Count(_RangeMessage, param.Integer):
+    """An integer quantity with bounds."""
+
+
+def _q(default, bounds, soft, label, doc, inclusive=(True, True), allow_none=False):
+    return Quantity(
+        default,
+        bounds=bounds,
+        softbounds=soft,
+        inclusive_bounds=inclusive,
+        label=label,
+        doc=doc,
+        allow_None=allow_none,
+    )
+
+
+class Vehicle(param.Parameterized):
+    """Metro car: masses and suspensions of one whole car (paper Table 1).
+
+    The one-rail model halves every mass and inertia; suspension values are per side.
+    """
+
+    car_body_mass = _q(38500.0, (0, None), (20000.0, 60000.0), "Car body mass (kg)",
+                       "Mass of one car body, M_c (paper Table 1).", (False, True))
+    car_body_pitch_inertia = _q(
+        None, (0, None), (5e5, 3e6), "Car body pitch inertia (kg·m²)",
+        "Pitch inertia of one car body. The paper does not give it; None means M_c·L_car²/12 "
+        "(uniform slender body, MODEL.md §1).", (False, True), allow_none=True)
+    bogie_mass = _q(2980.0, (0, None), (1500.0, 5000.0), "Bogie frame mass (kg)",
+                    "Mass of one bogie frame, M_t (paper Table 1).", (False, True))
+    bogie_pitch_inertia = _q(3605.0, (0, None), (1000.0, 8000.0), "Bogie pitch inertia (kg·m²)",
+                             "Pitch inertia of one bogie frame, J_t (paper Table 1).",
+                             (False, True))
+    wheelset_mass = _q(1350.0, (0, None), (800.0, 2500.0), "Wheelset mass (kg)",
+                       "Mass of one wheelset, M_w (paper Table 1).", (False, True))
+    primary_stiffness = _q(2.14e6, (0, None), (5e5, 5e6), "Primary suspension stiffness (N/m)",
+                           "Primary suspension stiffness per axle box, K_pz (paper Table 1).",
+                           (False, True))
+    primary_damping = _q(4.9e4, (0, None), (0.0, 2e5), "Primary suspension damping (N·s/m)",
+                         "Primary suspension damping per axle box, C_pz (paper Table 1).")
+    secondary_stiffness = _q(2.535e6, (0, None), (2e5, 5e6),
+                             "Secondary suspension stiffness (N/m)",
+                             "Secondary suspension stiffness per bogie side, K_sz (paper Table 1).",
+                             (False, True))
+    secondary_damping = _q(1.96e5, (0, None), (0.0, 5e5), "Secondary suspension damping (N·s/m)",
+                           "Secondary suspension damping per bogie side, C_sz (paper Table 1).")
+
+    @property
+    def static_wheel_load(self) -> float:
+        """Static load of one wheel on the rail (N): the car's weight over its eight wheels."""
+        car_mass = self.car_body_mass + 2 * self.bogie_mass + 4 * self.wheelset_mass
+        return car_mass * GRAVITY / 8.0
+
+
+class Train(param.Parameterized):
+    """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A train (MODEL.md §1)."""
+
+    n_cars = Count(6, bounds=(1, 12), softbounds=(1, 8), label="Number of cars",
+                   doc="Cars in the train; cars are independent (no coupler stiffness).")
+    speed_kmh = _q(80.0, (0, 400), (20.0, 160.0), "Speed (km/h)",
+                   "Train speed. The paper's case is 80 km/h (paper §4.1).", (False, True))
+    car_length = _q(22.0, (0, 60), (15.0, 30.0), "Car length (m)",
+                    "Length of one car over couplers; 22 m for Type A (MODEL.md §1).",
+                    (False, True))
+    bogie_distance = _q(15.7, (0, 50), (8.0, 20.0), "Bogie-centre distance (m)",
+                        "Distance between the two bogie centres of a car; 15.7 m for Type A.",
+                        (False, True))
+    wheelbase = _q(2.4, (0, 5), (1.8, 3.0), "Bogie wheelbase (m)",
+                   "Axle spacing within a bogie, twice the paper's half wheelbase l_h = 1.2 m.",
+                   (False, True))
+    single_bogie = param.Boolean(
+        False, label="Single bogie only",
+        doc="If true, simulate the paper's Fig. 1 model: half a car body on one bogie with two "
+            "wheelsets, instead of the full train.")
+
+    @classmethod
+    def type_a(cls, **overrides) -> Train:
+        """Nanjing six-car Type A train (22 m cars, 15.7 m bogie centres, 2.4 m wheelbase)."""
+        return cls(**{"car_length": 22.0, "bogie_distance": 15.7, "wheelbase": 2.4, **overrides})
+
+    @classmethod
+    def type_b(cls, **overrides) -> Train:
+        """Six-car Type B train (19 m cars, 12.6 m bogie centres, 2.3 m wheelbase)."""
+        return cls(**{"car_length": 19.0, "bogie_distance": 12.6, "wheelbase": 2.3, **overrides})
+
+    @property
+    def speed(self) -> float:
+        """Train speed (m/s)."""
+        return self.speed_kmh / 3.6
+
+    @property
+    def axle_offsets(self) -> list[float]:
+        """Distance of every axle behind the leading axle (m), leading axle first."""
+        if self.single_bogie:
+            return [0.0, self.wheelbase]
+        bogie = [0.0, self.wheelbase, self.bogie_distance, self.bogie_distance + self.wheelbase]
+        return [car * self.car_length + x for car in range(self.n_cars) for x in bogie]
+
+    @property
+    def axle_span(self) -> float:
+        """Distance from the leading to the trailing axle (m)."""
+        return self.axle_offsets[-1]
+
+    @property
+    def n_wheels(self) -> int:
+        """Wheels on one rail (= number of axles)."""
+        return len(self.axle_offsets)
+
+
+class Track(param.Parameterized):
+    """Elastic supporting-block ballastless track, one rail.
+
+    The paper's Table 2 is missing; defaults are typical Chinese-metro values (MODEL.md §2):
+    60 kg/m rail, 0.6 m block spacing.
+    """
+
+    rail_E = _q(2.059e11, (0, None), (1.9e11, 2.2e11), "Rail Young's modulus (Pa)",
+                "Young's modulus of rail steel (assumed, MODEL.md §2).", (False, True))
+    rail_I = _q(3.217e-5, (0, None), (1e-5, 6e-5), "Rail second moment of area (m⁴)",
+                "Vertical-bending second moment of area of the 60 kg/m rail (assumed).",
+                (False, True))
+    rail_mass = _q(60.64, (0, None), (40.0, 80.0), "Rail mass per length (kg/m)",
+                   "Mass per metre of the 60 kg/m rail (assumed).", (False, True))
+    block_spacing = _q(0.6, (0, 2), (0.5, 0.75), "Block spacing (m)",
+                       "Distance between supporting blocks, L_s (assumed).", (False, True))
+    fastener_stiffness = _q(8e7, (0, None), (1e7, 2e8), "Fastener stiffness (N/m)",
+                            "Rail pad / fastener stiffness per block, K_r (assumed).",
+                            (False, True))
+    fastener_damping = _q(5e4, (0, None), (0.0, 2e5), "Fastener damping (N·s/m)",
+                          "Rail pad / fastener damping per block, C_r (assumed).")
+    pad_stiffness = _q(4e7, (0, None), (5e6, 1.5e8), "Block pad stiffness (N/m)",
+                       "Block pad + rubber boot stiffness per block, K_s (assumed).",
+                       (False, True))
+    pad_damping = _q(8e4, (0, None), (0.0, 3e5), "Block pad damping (N·s/m)",
+                     "Block pad + rubber boot damping per block, C_s (assumed).")
+    block_mass = _q(100.0, (0, None), (50.0, 300.0), "Block mass (kg)",
+                    "Mass of one supporting block on one rail, M_s (assumed).", (False, True))
+    wheel_radius = _q(0.42, (0.1, 1.0), (0.35, 0.5), "Wheel radius (m)",
+                      "Rolling radius of the wheel, R (assumed).")
+    wheel_tread = param.Selector(
+        default="conical", objects=list(HERTZ_FITS), label="Wheel tread",
+        doc="Tread profile for the Hertz constant: conical G = 4.57 R^-0.149e-8, "
+            "worn G = 3.86 R^-0.115e-8 (paper §2.3, MODEL.md §3).")
+
+    @property
+    def hertz_constant(self) -> float:
+        """Hertz contact constant G (m/N^(2/3)): p = (δ/G)^(3/2)."""
+        a, b = HERTZ_FITS[self.wheel_tread]
+        return a * self.wheel_radius**b * 1e-8
+
+    @property
+    def bending_stiffness(self) -> float:
+        """Rail bending stiffness EI (N·m²)."""
+        return self.rail_E * self.rail_I
+
+    @property
+    def support_stiffness(self) -> float:
+        """Fastener and block pad in series, per block (N/m)."""
+        return self.fastener_stiffness * self.pad_stiffness / (
+            self.fastener_stiffness + self.pad_stiffness)
+
+    @property
+    def winkler_modulus(self) -> float:
+        """Equivalent continuous foundation modulus k = K_r K_s / ((K_r + K_s) L_s) (N/m²)."""
+        return self.support_stiffness / self.block_spacing
+
+    @property
+    def winkler_beta(self) -> float:
+        """Winkler-beam wavenumber β = (k / 4EI)^(1/4) (1/m)."""
+        return (self.winkler_modulus / (4.0 * self.bending_stiffness)) ** 0.25
+
+    def hertz_compression(self, wheel_load: float) -> float:
+        """Static Hertz compression δ = G p^(2/3) (m) under a wheel load p (N)."""
+        return self.hertz_constant * wheel_load ** (2.0 / 3.0)
+
+
+class Irregularity(param.Parameterized):
+    """Vertical rail-profile irregularity: US FRA PSD, trigonometric-series synthesis (§2.4)."""
+
+    enabled = param.Boolean(True, label="Irregularity on",
+                            doc="If false, the rail is perfectly smooth.")
+    track_class = Count(6, bounds=(1, 6), softbounds=(1, 6), label="FRA track class",
+                        doc="US FRA track class 1–6; 6 is the best track and the paper's choice.")
+    seed = Count(2024, bounds=(0, 2**32 - 1), softbounds=(0, 1000), label="Random seed",
+                 doc="Seed of the random phases of the synthesised profile.")
+    wavelength_min = _q(1.0, (0.05, 500), (0.5, 10.0), "Shortest wavelength (m)",
+                        "Lower end of the synthesised wavelength band (MODEL.md §4: 1 m).")
+    wavelength_max = _q(50.0, (0.1, 1000), (10.0, 120.0), "Longest wavelength (m)",
+                        "Upper end of the synthesised wavelength band (MODEL.md §4: 50 m).")
+    n_components = Count(2000, bounds=(10, 200000), softbounds=(200, 10000),
+                         label="Harmonic components",
+                         doc="Number of cosines in the trigonometric series.")
+    profile_csv = param.String(
+        None, allow_None=True, label="Measured profile CSV",
+        doc="Path of a measured profile (columns x in m, η in m or mm); replaces the synthetic "
+            "profile when set.")
+
+    @property
+    def roughness_cm2_rad_per_m(self) -> float:
+        """FRA roughness parameter A_v of the selected class (cm²·rad/m)."""
+        return FRA_ROUGHNESS_CM2_RAD_PER_M[self.track_class]
+
+
+class Tunnel(param.Parameterized):
+    """Concrete lining as a thin elastic ring in plane strain (paper Table 3, corrected)."""
+
+    inner_radius = _q(2.7, (0, 20), (2.0, 4.0), "Lining inner radius (m)",
+                      "Inner radius of the lining (paper Table 3).", (False, True))
+    thickness = _q(0.30, (0, 2), (0.2, 0.6), "Lining thickness (m)",
+                   "Lining thickness h; the paper's '30 m' is a typo for 0.30 m (MODEL.md §7).",
+                   (False, True))
+    youngs_modulus = _q(3.45e10, (0, None), (1e10, 5e10), "Lining Young's modulus (Pa)",
+                        "Young's modulus of the lining concrete (paper Table 3).", (False, True))
+    poisson_ratio = _q(0.17, (0, 0.5), (0.1, 0.3), "Lining Poisson's ratio (-)",
+                       "Poisson's ratio of the lining concrete (paper Table 3).", (True, False))
+    density = _q(2450.0, (0, None), (2000.0, 2800.0), "Lining density (kg/m³)",
+                 "Density of the lining concrete (paper Table 3).", (False, True))
+
+    @property
+    def ring_radius(self) -> float:
+        """Radius of the ring's middle surface a = inner radius + h/2 (m)."""
+        return self.inner_radius + 0.5 * self.thickness
+
+    @property
+    def extensional_stiffness(self) -> float:
+        """Plane-strain membrane stiffness K = Eh/(1 − ν²) (N/m)."""
+        return self.youngs_modulus * self.thickness / (1.0 - self.poisson_ratio**2)
+
+    @property
+    def bending_stiffness(self) -> float:
+        """Plane-strain bending stiffness D = Eh³/(12(1 − ν²)) (N·m)."""
+        return self.extensional_stiffness * self.thickness**2 / 12.0
+
+
+class Soil(param.Parameterized):
+    """Homogeneous, isotropic, hysteretically damped elastic full-space (paper Table 4).
+
+    Primary inputs are E, ν, ρ and the loss factors; wave speeds and Lamé constants are derived.
+    The default E = 6 MPa, ν = 0.3 is the only reading of the self-inconsistent Table 4 that
+    reproduces the paper's millimetre magnitudes (MODEL.md §7); the others are presets.
+    """
+
+    youngs_modulus = _q(6e6, (0, None), (1e6, 1e8), "Soil Young's modulus (Pa)",
+                        "Young's modulus of the soft soil (paper Table 4).", (False, True))
+    poisson_ratio = _q(0.3, (0, 0.5), (0.1, 0.49), "Soil Poisson's ratio (-)",
+                       "Poisson's ratio of the soil (paper Table 4); must stay below 0.5.",
+                       (True, False))
+    density = _q(1800.0, (0, None), (1400.0, 2200.0), "Soil density (kg/m³)",
+                 "Soil density (assumed typical of Nanjing soft clay; not in Table 4).",
+                 (False, True))
+    shear_loss_factor = _q(0.06, (0, 2), (0.0, 0.3), "Shear loss factor η_G (-)",
+                           "Hysteretic shear loss factor: μ* = μ(1 + iη_G) (paper Table 4).")
+    bulk_loss_factor = _q(0.0, (0, 2), (0.0, 0.3), "Bulk loss factor η_K (-)",
+                          "Hysteretic bulk loss factor: K* = K(1 + iη_K) (paper Table 4).")
+
+    @classmethod
+    def from_lame(cls, lame_lambda: float, shear_modulus: float, density: float,
+                  **overrides) -> Soil:
+        """Soil from its Lamé constants λ, μ (Pa) and density (kg/m³)."""
+        youngs = shear_modulus * (3 * lame_lambda + 2 * shear_modulus) / (
+            lame_lambda + shear_modulus)
+        poisson = lame_lambda / (2 * (lame_lambda + shear_modulus))
+        return cls(youngs_modulus=youngs, poisson_ratio=poisson, density=density, **overrides)
+
+    @classmethod
+    def from_wave_speeds(cls, p_wave_speed: float, s_wave_speed: float, density: float,
+                         **overrides) -> Soil:
+        """Soil from its P- and S-wave speeds c1, c2 (m/s) and density (kg/m³)."""
+        shear = density * s_wave_speed**2
+        lame_lambda = density * p_wave_speed**2 - 2 * shear
+        return cls.from_lame(lame_lambda, shear, density, **overrides)
+
+    @property
+    def shear_modulus(self) -> float:
+        """Lamé μ = E / (2(1 + ν)) (Pa)."""
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
+
+    @property
+    def lame_lambda(self) -> float:
+        """Lamé λ = 2νμ / (1 − 2ν) (Pa)."""
+        return 2.0 * self.poisson_ratio * self.shear_modulus / (1.0 - 2.0 * self.poisson_ratio)
+
+    @property
+    def bulk_modulus(self) -> float:
+        """Bulk modulus K = λ + 2μ/3 (Pa)."""
+        return self.lame_lambda + 2.0 * self.shear_modulus / 3.0
+
+    @property
+    def p_wave_speed(self) -> float:
+        """Compression wave speed c1 = √((λ + 2μ)/ρ) (m/s), undamped."""
+        return math.sqrt((self.lame_lambda + 2.0 * self.shear_modulus) / self.density)
+
+    @property
+    def s_wave_speed(self) -> float:
+        """Shear wave speed c2 = √(μ/ρ) (m/s), undamped."""
+        return math.sqrt(self.shear_modulus / self.density)
+
+
+class Numerics(param.Parameterized):
+    """Discretisation and output settings of every stage."""
+
+    dt = _q(1e-4, (0, 1e-2), (2e-5, 2e-4), "Time step Δt (s)",
+            "Time step of Zhai's explicit integrator (paper default 1e-4 s).", (False, True))
+    n_rail_modes = Count(None, bounds=(1, 20000), softbounds=(50, 2000), allow_None=True,
+                         label="Rail modes",
+                         doc="Modes of the simply supported rail; None means L/L_s (shortest "
+                             "modal half-wavelength = block spacing, MODEL.md §2).")
+    rail_end_margin = _q(20.0, (0, None), (20.0, 60.0), "Rail end margin (m)",
+                         "Minimum distance from any axle to a rail end during the run "
+                         "(MODEL.md §2: ≥ 20 m).")
+    approach_distance = _q(10.0, (0, None), (5.0, 40.0), "Approach distance (m)",
+                           "Distance of the leading axle before the monitored block at the "
+                           "start, and of the trailing axle past it at the end.")
+    n_harmonics = Count(32, bounds=(1, 1024), softbounds=(4, 128), label="Ring harmonics",
+                        doc="Circumferential harmonics n = 0..N_n summed in the tunnel–soil "
+                            "model.")
+    soil_max_frequency = _q(100.0, (0, 5000), (30.0, 300.0), "Soil model frequency limit (Hz)",
+                            "Highest frequency passed to the tunnel–soil model; the load has "
+                            "negligible content above (paper Fig. 7: 0–30 Hz).", (False, True))
+    zero_pad_factor = Count(8, bounds=(1, 256), softbounds=(1, 32), label="Zero-padding factor",
+                            doc="Record length used for the soil FFT, as a multiple of the "
+                                "passage duration (convergence of the peak is shown in tests).")
+    psd_segment = _q(4.0, (0, None), (1.0, 10.0), "PSD segment length (s)",
+                     "Welch segment length for the one-sided PSDs (frequency resolution 1/T); a "
+                     "shorter record is analysed whole.",
+                     (False, True))
+    max_depth = _q(35.0, (0, 500), (10.0, 60.0), "Deepest output depth (m)",
+                   "Depth below the invert down to which the displacement is reported "
+                   "(paper Fig. 11 and conclusions: 35 m).", (False, True))
+    n_depths = Count(71, bounds=(2, 2000), softbounds=(11, 201), label="Output depths",
+                     doc="Number of equally spaced depths from the invert to the deepest one.")
+
+
+SECTIONS = ("vehicle", "train", "track", "irregularity", "tunnel", "soil", "numerics")
+
+
+class Scenario(param.Parameterized):
+    """One complete set of inputs: vehicle, train, track, irregularity, tunnel, soil, numerics."""
+
+    vehicle = param.ClassSelector(class_=Vehicle, instantiate=True)
+    train = param.ClassSelector(class_=Train, instantiate=True)
+    track = param.ClassSelector(class_=Track, instantiate=True)
+    irregularity = param.ClassSelector(class_=Irregularity, instantiate=True)
+    tunnel = param.ClassSelector(class_=Tunnel, instantiate=True)
+    soil = param.ClassSelector(class_=Soil, instantiate=True)
+    numerics = param.ClassSelector(class_=Numerics, instantiate=True)
+
+    def __init__(self, **params):
+        classes = {name: self.param[name].class_ for name in SECTIONS}
+        for name, cls in classes.items():
+            params.setdefault(name, cls())
+        super().__init__(**params)
+
+    # ---- presets --------------------------------------------------------------------------
+    @staticmethod
+    def preset_names() -> list[str]:
+        """Names of the presets stored in ``assets/presets.json``."""
+        return list(_load_presets())
+
+    @classmethod
+    def preset(cls, name: str) -> Scenario:
+        """Scenario of a named preset from ``assets/presets.json``."""
+        presets = _load_presets()
+        if name not in presets:
+            raise KeyError(f"unknown preset {name!r}; available: {', '.join(presets)}")
+        scenario = cls()
+        scenario.update(presets[name]["values"])
+        return scenario
+
+    @classmethod
+    def paper(cls) -> Scenario:
+        """The paper's Nanjing case as read by MODEL.md: Type A six cars, 80 km/h, FRA 6."""
+        return cls.preset("paper")
+
+    @classmethod
+    def paper_soil_lame(cls) -> Scenario:
+        """Paper case with the soil of Table 4's Lamé constants (E ≈ 550 MPa, ν ≈ 0.44)."""
+        return cls.preset("paper_soil_lame")
+
+    @classmethod
+    def paper_soil_wave_speeds(cls) -> Scenario:
+        """Paper case with the soil of Table 4's wave speeds c1 = 524, c2 = 190 m/s."""
+        return cls.preset("paper_soil_wave_speeds")
+
+    @classmethod
+    def type_b(cls) -> Scenario:
+        """Paper case with a six-car Type B train."""
+        return cls.preset("type_b")
+
+    # ---- serialisation --------------------------------------------------------------------
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """All inputs as nested plain values, ``{section: {parameter: value}}``."""
+        return {
+            section: {
+                name: getattr(obj, name) for name in obj.param if name != "name"
+            }
+            for section in SECTIONS
+            for obj in [getattr(self, section)]
+        }
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """JSON text of :meth:`to_dict`; floats are written exactly (shortest repr)."""
+        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, dict[str, Any]]) -> Scenario:
+        """Scenario from :meth:`to_dict` output (missing values take their defaults)."""
+        scenario = cls()
+        scenario.update(data)
+        return scenario
+
+    @classmethod
+    def from_json(cls, text: str) -> Scenario:
+        """Scenario from :meth:`to_json` output."""
+        return cls.from_dict(json.loads(text))
+
+    def copy(self) -> Scenario:
+        """Independent deep copy."""
+        return type(self).from_dict(self.to_dict())
+
+    def update(self, values: dict[str, dict[str, Any]]) -> None:
+        """Set parameters from ``{section: {parameter: value}}``; unknown names are refused."""
+        for section, section_values in values.items():
+            if section not in SECTIONS:
+                raise KeyError(f"unknown section {section!r}; expected one of {SECTIONS}")
+            obj = getattr(self, section)
+            unknown = (set(section_values) - set(obj.param)) | ({"name"} & set(section_values))
+            if unknown:
+                raise KeyError(f"unknown parameter(s) {sorted(unknown)} in section {section!r}")
+            obj.param.update(**section_values)
+
+    def set_value(self, path: str, value: Any) -> None:
+        """Set one parameter by dotted path, e.g. ``set_value("train.speed_kmh", 60)``.
+
+        A string value is converted to the parameter's type ("none" gives None for optional
+        parameters).
+        """
+        section, _, name = path.partition(".")
+        if section not in SECTIONS or not name:
+            raise KeyError(f"{path!r} is not of the form section.parameter with section in "
+                           f"{SECTIONS}")
+        obj = getattr(self, section)
+        if name not in obj.param or name == "name":
+            raise KeyError(f"unknown parameter {name!r} in section {section!r}; available: "
+                           f"{', '.join(n for n in obj.param if n != 'name')}")
+        if isinstance(value, str):
+            value = _parse_value(obj.param[name], path, value)
+        setattr(obj, name, value)
+
+    # ---- derived quantities that need more than one section --------------------------------
+    @property
+    def car_body_pitch_inertia(self) -> float:
+        """Car body pitch inertia (kg·m²): the given value, or M_c·L_car²/12 when None."""
+        given = self.vehicle.car_body_pitch_inertia
+        if given is not None:
+            return given
+        return self.vehicle.car_body_mass * self.train.car_length**2 / 12.0
+
+    @property
+    def rail_length(self) -> float:
+        """Rail length L (m), a whole number of block spacings.
+
+        The leading axle starts ``approach_distance`` before the monitored block at mid-length
+        and the trailing axle ends the same distance past it, every axle staying
+        ``rail_end_margin`` from both rail ends: L ≥ 2 (margin + approach + axle span).
+        """
+        n = self.numerics
+        needed = 2.0 * (n.rail_end_margin + n.approach_distance + self.train.axle_span)
+        n_spacings = math.ceil(needed / self.track.block_spacing - 1e-9)
+        n_spacings += n_spacings % 2  # even, so the mid-length point is a block position
+        return n_spacings * self.track.block_spacing
+
+    @property
+    def rail_modes(self) -> int:
+        """Number of rail modes used: the given value, or L/L_s (MODEL.md §2)."""
+        if self.numerics.n_rail_modes is not None:
+            return self.numerics.n_rail_modes
+        return round(self.rail_length / self.track.block_spacing)
+
+    @property
+    def passage_duration(self) -> float:
+        """Simulated time (s): leading axle from approach to trailing axle past the block."""
+        travel = 2.0 * self.numerics.approach_distance + self.train.axle_span
+        return travel / self.train.speed
+
+    @property
+    def depths(self) -> list[float]:
+        """Output depths below the invert (m)."""
+        n = self.numerics
+        step = n.max_depth / (n.n_depths - 1)
+        return [i * step for i in range(n.n_depths)]
+
+    def validate(self) -> None:
+        """Check constraints between parameters; raise :class:`ScenarioError` listing all."""
+        problems = []
+        irr, tr = self.irregularity, self.train
+        if irr.wavelength_min >= irr.wavelength_max:
+            problems.append(
+                f"irregularity.wavelength_min = {irr.wavelength_min:g} m must be below "
+                f"irregularity.wavelength_max = {irr.wavelength_max:g} m")
+        if not tr.single_bogie and tr.bogie_distance + tr.wheelbase >= tr.car_length:
+            problems.append(
+                f"train.bogie_distance + train.wheelbase = {tr.bogie_distance + tr.wheelbase:g} m "
+                f"must be shorter than train.car_length = {tr.car_length:g} m")
+        if tr.wheelbase >= tr.bogie_distance and not tr.single_bogie:
+            problems.append(f"train.wheelbase = {tr.wheelbase:g} m must be shorter than "
+                            f"train.bogie_distance = {tr.bogie_distance:g} m")
+        min_modes = math.ceil(0.5 * self.rail_length / self.track.block_spacing)
+        if self.rail_modes < min_modes:
+            problems.append(
+                f"numerics.n_rail_modes = {self.rail_modes} is too few for a "
+                f"{self.rail_length:g} m rail: at least 0.5 L/L_s = {min_modes} are needed "
+                f"(L/L_s = {2 * min_modes} recommended)")
+        if problems:
+            raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
+
+
+def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
+    """Convert command-line text to the type of ``parameter``; refuse with a clear message."""
+    if text.strip().lower() == "none" and parameter.allow_None:
+        return None
+    try:
+        if isinstance(parameter, param.Boolean):
+            lowered = text.strip().lower()
+            if lowered not in {"true", "false", "1", "0", "yes", "no"}:
+                raise ValueError
+            return lowered in {"true", "1", "yes"}
+        if isinstance(parameter, param.Integer):
+            return int(text)
+        if isinstance(parameter, param.Number):
+            return float(text)
+    except ValueError:
+        kind = ("true/false" if isinstance(parameter, param.Boolean)
+                else "whole number" if isinstance(parameter, param.Integer) else "number")
+        raise ValueError(f"{path} = {text!r} is not a {kind} ({parameter.label})") from None
+    return text
+
+
+def _load_presets() -> dict[str, dict[str, Any]]:
+    with PRESETS_FILE.open(encoding="utf-8") as handle:
+        return json.load(handle)["presets"]
