@@ -245,7 +245,7 @@ class Irregularity(param.Parameterized):
                             doc="If false, the rail is perfectly smooth.")
     track_class = Count(6, bounds=(1, 6), softbounds=(1, 6), label="FRA track class",
                         doc="US FRA track class 1–6; 6 is the best track and the paper's choice.")
-    seed = Count(2024, bounds=(0, 2**32 - 1), softbounds=(0, 1000), label="Random seed",
+    seed = Count(2024, bounds=(0, 2**32 - 1), softbounds=(0, 9999), label="Random seed",
                  doc="Seed of the random phases of the synthesised profile.")
     wavelength_min = _q(1.0, (0.05, 500), (0.5, 10.0), "Shortest wavelength (m)",
                         "Lower end of the synthesised wavelength band (MODEL.md §4: 1 m).")
