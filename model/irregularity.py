@@ -1,0 +1,309 @@
+"""Vertical rail-profile irregularity (paper §2.4, MODEL.md §4).
+
+The US FRA vertical-profile PSD, its trigonometric-series synthesis and measured profiles read
+from CSV. Sign convention: vertical displacements are positive **downward** in this project and
+the wheel–rail compression is δ = Z_w − Z_r(x_w) − η(x_w) (δ > 0 in compression), so the rail
+surface under a wheel sits at Z_r + η: **η > 0 is a dip** (surface below nominal) and η < 0 a
+bump. A measured profile must be given in this convention.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from model.params import FRA_ROUGHNESS_CM2_RAD_PER_M, Irregularity
+
+FRA_SCALE_FACTOR = 0.25  # k of the FRA formula (MODEL.md §4)
+FRA_CUTOFF_WAVENUMBER = 0.8245  # Ω_c (rad/m)
+CM2_TO_M2 = 1e-4
+
+# Phasors are recomputed exactly every this many grid points so rounding in the rotation
+# recurrence (growing ~ eps per step) stays below ~1e-13 of the amplitude.
+_REANCHOR_POINTS = 1024
+# A grid counts as uniform when every point is within this fraction of the step of the ideal
+# grid; the profile's slope is O(1e-3), so the resulting error is below 1e-9 · step.
+_UNIFORM_GRID_TOLERANCE = 1e-6
+
+_ETA_UNITS_TO_M = {"eta_m": 1.0, "eta_mm": 1e-3}
+
+
+def _check_track_class(track_class) -> int:
+    """Return ``track_class`` as an int, or raise naming the allowed classes."""
+    if isinstance(track_class, bool) or not isinstance(track_class, int | np.integer) or (
+            int(track_class) not in FRA_ROUGHNESS_CM2_RAD_PER_M):
+        raise ValueError(f"track_class = {track_class!r} is not an FRA track class; allowed: "
+                         f"integers 1–6 (6 is the best track)")
+    return int(track_class)
+
+
+def fra_psd(wavenumber_rad_per_m, track_class: int) -> np.ndarray:
+    """US FRA vertical-profile PSD, one-sided.
+
+    S(Ω) = k A_v Ω_c² / (Ω² (Ω² + Ω_c²)), k = 0.25, Ω_c = 0.8245 rad/m, A_v of the class
+    (``model.params.FRA_ROUGHNESS_CM2_RAD_PER_M``), converted from cm²/(rad/m) to m²/(rad/m).
+
+    Parameters
+    ----------
+    wavenumber_rad_per_m : float or array_like
+        Angular spatial frequency Ω = 2π/λ (rad/m), finite and > 0.
+    track_class : int
+        FRA track class 1–6 (6 is the best track).
+
+    Returns
+    -------
+    ndarray
+        S(Ω) in m²/(rad/m), same shape as the input.
+    """
+    amplitude = FRA_ROUGHNESS_CM2_RAD_PER_M[_check_track_class(track_class)]
+    omega = np.asarray(wavenumber_rad_per_m, dtype=float)
+    if not np.all(np.isfinite(omega)) or np.any(omega <= 0.0):
+        bad = omega[~(np.isfinite(omega) & (omega > 0.0))].ravel()[0]
+        raise ValueError(f"wavenumber_rad_per_m = {bad!r} is outside the allowed range "
+                         f"(0, inf) rad/m")
+    omega_c2 = FRA_CUTOFF_WAVENUMBER**2
+    psd_cm2 = FRA_SCALE_FACTOR * amplitude * omega_c2 / (omega**2 * (omega**2 + omega_c2))
+    return psd_cm2 * CM2_TO_M2
+
+
+def series_wavenumbers(wavelength_band_m: tuple[float, float], n_components: int):
+    """Wavenumbers of the trigonometric series: midpoints of ``n_components`` equal bins.
+
+    Parameters
+    ----------
+    wavelength_band_m : (float, float)
+        (λ_min, λ_max) in m, 0 < λ_min < λ_max; the series covers Ω in [2π/λ_max, 2π/λ_min].
+    n_components : int
+        Number of cosines, ≥ 1.
+
+    Returns
+    -------
+    wavenumbers : ndarray
+        Ω_k (rad/m), shape (n_components,).
+    spacing : float
+        Bin width ΔΩ (rad/m).
+    """
+    try:
+        wavelength_min, wavelength_max = (float(v) for v in wavelength_band_m)
+    except (TypeError, ValueError):
+        raise ValueError(f"wavelength_band_m = {wavelength_band_m!r} must be a pair "
+                         f"(shortest, longest) of wavelengths in m") from None
+    if not (math.isfinite(wavelength_min) and math.isfinite(wavelength_max)
+            and 0.0 < wavelength_min < wavelength_max):
+        raise ValueError(f"wavelength_band_m = {wavelength_band_m!r} must satisfy "
+                         f"0 < shortest < longest < inf (m)")
+    if isinstance(n_components, bool) or not isinstance(n_components, int | np.integer) or (
+            n_components < 1):
+        raise ValueError(f"n_components = {n_components!r} is outside the allowed range: "
+                         f"integers >= 1")
+    omega_min = 2.0 * math.pi / wavelength_max
+    omega_max = 2.0 * math.pi / wavelength_min
+    spacing = (omega_max - omega_min) / n_components
+    return omega_min + (np.arange(n_components) + 0.5) * spacing, spacing
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _series_on_uniform_grid(x_start, x_step, n_points, amplitudes, wavenumbers, phases,
+                            reanchor_points):
+    """Σ_k a_k cos(Ω_k x + φ_k) at x = x_start + j·x_step by phasor rotation along the grid."""
+    n_comp = amplitudes.size
+    out = np.empty(n_points)
+    real = np.empty(n_comp)
+    imag = np.empty(n_comp)
+    step_real = np.cos(wavenumbers * x_step)
+    step_imag = np.sin(wavenumbers * x_step)
+    for block_start in range(0, n_points, reanchor_points):
+        x = x_start + block_start * x_step
+        for k in range(n_comp):
+            angle = wavenumbers[k] * x + phases[k]
+            real[k] = amplitudes[k] * math.cos(angle)
+            imag[k] = amplitudes[k] * math.sin(angle)
+        for j in range(block_start, min(block_start + reanchor_points, n_points)):
+            total = 0.0
+            for k in range(n_comp):
+                total += real[k]
+                rotated = real[k] * step_real[k] - imag[k] * step_imag[k]
+                imag[k] = real[k] * step_imag[k] + imag[k] * step_real[k]
+                real[k] = rotated
+            out[j] = total
+    return out
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _series_at_points(x, amplitudes, wavenumbers, phases):
+    """Σ_k a_k cos(Ω_k x + φ_k) at arbitrary points x by direct evaluation."""
+    out = np.empty(x.size)
+    for j in range(x.size):
+        total = 0.0
+        for k in range(amplitudes.size):
+            total += amplitudes[k] * math.cos(wavenumbers[k] * x[j] + phases[k])
+        out[j] = total
+    return out
+
+
+def _uniform_step(x: np.ndarray) -> float | None:
+    """The step of ``x`` if it is a uniform grid (to ``_UNIFORM_GRID_TOLERANCE``), else None."""
+    if x.size < 3:
+        return None
+    step = (x[-1] - x[0]) / (x.size - 1)
+    if step == 0.0:
+        return None
+    ideal = x[0] + np.arange(x.size) * step
+    if np.max(np.abs(x - ideal)) > _UNIFORM_GRID_TOLERANCE * abs(step):
+        return None
+    return step
+
+
+def synthesize_profile(x_m, track_class: int, seed: int,
+                       wavelength_band_m: tuple[float, float] = (1.0, 50.0),
+                       n_components: int = 2000) -> np.ndarray:
+    """Random vertical profile η(x) with the FRA PSD, by trigonometric series.
+
+    η(x) = Σ_k sqrt(2 S(Ω_k) ΔΩ) cos(Ω_k x + φ_k), Ω_k the midpoints of ``n_components`` equal
+    bins across [2π/λ_max, 2π/λ_min], φ_k uniform on [0, 2π) from
+    ``np.random.default_rng(seed)``. Its spatial variance is Σ_k S(Ω_k) ΔΩ, the midpoint rule
+    for the integral of S over the band. η > 0 is a dip (down positive, see module docstring).
+
+    A uniform grid (the usual case) is evaluated by phasor rotation, O(n_points · n_components)
+    multiply–adds; any other set of points by direct cosines (about 30× slower).
+
+    Parameters
+    ----------
+    x_m : array_like
+        Positions along the rail (m), 1-D, finite.
+    track_class : int
+        FRA track class 1–6.
+    seed : int
+        Seed of the random phases, ≥ 0.
+    wavelength_band_m : (float, float)
+        Shortest and longest wavelength (m) of the series.
+    n_components : int
+        Number of cosines.
+
+    Returns
+    -------
+    ndarray
+        η at ``x_m`` (m), positive downward.
+    """
+    track_class = _check_track_class(track_class)
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed = {seed!r} is outside the allowed range: integers >= 0")
+    x = np.asarray(x_m, dtype=float)
+    if x.ndim != 1:
+        raise ValueError(f"x_m must be 1-D; got an array of shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("x_m contains NaN or infinite positions; allowed: finite values (m)")
+    wavenumbers, spacing = series_wavenumbers(wavelength_band_m, n_components)
+    amplitudes = np.sqrt(2.0 * fra_psd(wavenumbers, track_class) * spacing)
+    phases = np.random.default_rng(seed).uniform(0.0, 2.0 * math.pi, wavenumbers.size)
+    step = _uniform_step(x)
+    if step is None:
+        return _series_at_points(x, amplitudes, wavenumbers, phases)
+    return _series_on_uniform_grid(x[0], step, x.size, amplitudes, wavenumbers, phases,
+                                   _REANCHOR_POINTS)
+
+
+def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
+    """Measured vertical profile from a CSV file.
+
+    Format: lines starting with ``#`` and blank lines are ignored; the first other line is the
+    header ``x_m,eta_m`` or ``x_m,eta_mm`` (η in mm is converted to m); then one ``x,η`` pair per
+    line, at least two, x strictly increasing, all values finite. η follows the project's
+    convention: positive is a dip.
+
+    Parameters
+    ----------
+    path : str or Path
+        File to read.
+
+    Returns
+    -------
+    x_m : ndarray
+        Positions (m), strictly increasing.
+    eta_m : ndarray
+        Profile (m), positive downward.
+
+    Raises
+    ------
+    ValueError
+        If the file is malformed; the message names the file, the line number and the fault.
+    """
+    path = Path(path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    to_m = None
+    x_values: list[float] = []
+    eta_values: list[float] = []
+    for number, raw in enumerate(lines, start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        fields = [field.strip() for field in line.split(",")]
+        where = f"{path}, line {number}"
+        if to_m is None:
+            if len(fields) != 2 or fields[0] != "x_m" or fields[1] not in _ETA_UNITS_TO_M:
+                raise ValueError(f"{where}: header {line!r} must be 'x_m,eta_m' or 'x_m,eta_mm'")
+            to_m = _ETA_UNITS_TO_M[fields[1]]
+            continue
+        if len(fields) != 2:
+            raise ValueError(f"{where}: expected 2 comma-separated values, found {len(fields)} "
+                             f"in {line!r}")
+        try:
+            x, eta = float(fields[0]), float(fields[1])
+        except ValueError:
+            raise ValueError(f"{where}: {line!r} is not two numbers") from None
+        if not (math.isfinite(x) and math.isfinite(eta)):
+            raise ValueError(f"{where}: {line!r} contains a non-finite value")
+        if x_values and x <= x_values[-1]:
+            raise ValueError(f"{where}: x = {x!r} m does not exceed the previous x = "
+                             f"{x_values[-1]!r} m; x must be strictly increasing")
+        x_values.append(x)
+        eta_values.append(eta * to_m)
+    if to_m is None:
+        raise ValueError(f"{path}: no header line 'x_m,eta_m' or 'x_m,eta_mm' found")
+    if len(x_values) < 2:
+        raise ValueError(f"{path}: {len(x_values)} data line(s); at least 2 are needed")
+    return np.array(x_values), np.array(eta_values)
+
+
+def profile_for(irregularity: Irregularity, x_m) -> np.ndarray:
+    """Rail profile η (m, positive downward) at positions ``x_m`` for an Irregularity.
+
+    Zeros if ``irregularity.enabled`` is false; else the measured profile of
+    ``irregularity.profile_csv``, linearly interpolated, if set; else
+    :func:`synthesize_profile` with the object's class, seed, wavelength band and number of
+    components.
+
+    Parameters
+    ----------
+    irregularity : model.params.Irregularity
+        Irregularity settings.
+    x_m : array_like
+        Positions along the rail (m), 1-D.
+
+    Returns
+    -------
+    ndarray
+        η at ``x_m`` (m).
+
+    Raises
+    ------
+    ValueError
+        If ``x_m`` reaches outside the range covered by a measured profile.
+    """
+    x = np.asarray(x_m, dtype=float)
+    if not irregularity.enabled:
+        return np.zeros_like(x)
+    if irregularity.profile_csv:
+        x_measured, eta_measured = load_profile_csv(irregularity.profile_csv)
+        if x.size and (x.min() < x_measured[0] or x.max() > x_measured[-1]):
+            raise ValueError(
+                f"x_m spans [{x.min():g}, {x.max():g}] m but the measured profile "
+                f"{irregularity.profile_csv} covers only [{x_measured[0]:g}, "
+                f"{x_measured[-1]:g}] m")
+        return np.interp(x, x_measured, eta_measured)
+    return synthesize_profile(
+        x, irregularity.track_class, irregularity.seed,
+        (irregularity.wavelength_min, irregularity.wavelength_max), irregularity.n_components)
