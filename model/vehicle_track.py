@@ -1,0 +1,617 @@
+"""Nonlinear vehicle–track model: the excitation model of the paper (§2, §4.1; MODEL.md §1–6).
+
+Vehicle (one-rail half model): the paper's single bogie (half car body in bounce, bogie bounce
+and pitch, two wheelsets) or a train of independent 10-DOF cars. Track: simply supported modal
+Euler rail on identical, uniformly spaced blocks (fastener K_r, C_r; block mass M_s; block pad
+K_s, C_s onto the rigid invert). Hertz contact with loss of contact, rail irregularity from
+:func:`model.irregularity.profile_for`, Zhai's explicit integrator (φ = ψ = ½) from static
+equilibrium. Equations, the fast formulation and measured figures: ``docs/vehicle_track.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from model import _vt_kernels as kernels
+from model.params import GRAVITY, Scenario
+
+ZHAI_PHI = 0.5
+ZHAI_PSI = 0.5
+# stable_time_step: Hertz stiffness linearised at this multiple of the static wheel load (the
+# dynamic load rarely exceeds it), and this factor on the resulting limit.
+HERTZ_OVERLOAD = 2.0
+STABILITY_SAFETY = 0.9
+# A wheel–rail compression or gap beyond this (m) means the integration has diverged: the
+# static compression is ~0.08 mm, and 10 mm would be 80 MN or a wheel jumping clear of the rail.
+DIVERGENCE_COMPRESSION = 0.01
+# Irregularity sampled for linear interpolation at this spacing (m), or λ_min/100 if finer
+# (interpolation error < 5e-4 of the amplitude at λ_min).
+PROFILE_GRID_STEP = 0.005
+MAX_OUTPUT_VALUES = 50_000_000  # 400 MB of float64 output
+MAX_CONTACT_EVENTS = 10_000
+MIN_RAIL_END_MARGIN = 20.0  # m between any axle and a rail end (MODEL.md §2)
+PROGRESS_CALLS = 40
+
+CONTACT_EVENT_DTYPE = np.dtype(
+    [("wheel", np.int64), ("t_s", float), ("x_m", float), ("duration_s", float)])
+
+
+@dataclass
+class VehicleTrackResult:
+    """Time histories of one passage (SI; displacements down +, from the unloaded track).
+
+    Arrays over time have ``nt`` samples at ``t_s``; wheels are ordered from the leading axle.
+    """
+
+    t_s: np.ndarray
+    block_force_N: np.ndarray  # K_s Z_s + C_s Ż_s under the monitored block, static part included
+    block_disp_m: np.ndarray  # monitored block
+    rail_disp_m: np.ndarray  # rail above the monitored block
+    wheel_force_N: np.ndarray  # (n_wheels, nt) wheel–rail contact forces
+    wheel_acc_m_s2: np.ndarray  # (n_wheels, nt) wheelset accelerations
+    car_body_acc_m_s2: np.ndarray  # (n_bodies, nt) car-body bounce accelerations
+    axle_pass_times_s: np.ndarray  # (n_wheels,) when each axle is over the monitored block
+    winkler_block_disp_m: np.ndarray  # quasi-static Winkler beam (BOEF), static wheel loads
+    monitored_block_x_m: float
+    contact_loss: np.ndarray  # CONTACT_EVENT_DTYPE records: wheel, t_s, x_m, duration_s
+    unstable: bool
+    warnings: list[str] = field(default_factory=list)
+    static_wheel_load_N: float = 0.0
+    dt_s: float = 0.0
+    stable_dt_s: float = 0.0
+    n_rail_modes: int = 0
+    rail_length_m: float = 0.0
+    speed_m_s: float = 0.0
+
+
+# ---- assembly -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _VehicleSystem:
+    """Per-car matrices of the linear vehicle (kernel arrays)."""
+
+    inv_mass: np.ndarray  # (n_cars, d)
+    stiffness: np.ndarray  # (n_cars, d, d)
+    damping: np.ndarray  # (n_cars, d, d)
+    gravity_force: np.ndarray  # (n_cars, d)
+    wheel_dof: np.ndarray  # (n_cars, wheels per car), local DOF index of each wheelset
+    body_dof: int  # local DOF index of the car-body bounce
+
+
+@dataclass(frozen=True)
+class _TrackSystem:
+    """Modal rail on uniformly spaced identical blocks in the diagonal (block modal) form."""
+
+    length: float
+    n_spacings: int  # N = L / L_s; blocks at i L_s, i = 1..N−1
+    omega2: np.ndarray  # (N_m,) ω_k² of the free rail
+    fold_index: np.ndarray  # (N_m,) block mode ρ(k) − 1 that rail mode k meets, −1 if none
+    fold_sign: np.ndarray  # (N_m,) σ_k
+    block_gain: float  # b = 1/√(m_r L_s)
+    mode_amplitude: float  # A = √(2/(m_r L)): Y_k(x) = A sin(kπx/L)
+    fastener_k: float
+    fastener_c: float
+    pad_k: float
+    pad_c: float
+    block_mass: float
+
+    @property
+    def wavenumber_unit(self) -> float:
+        """π/L (1/m)."""
+        return math.pi / self.length
+
+    def mode_shapes(self, x: np.ndarray) -> np.ndarray:
+        """Y_k(x) for all modes, shape (N_m, x.size)."""
+        k = np.arange(1, self.omega2.size + 1)
+        return self.mode_amplitude * np.sin(np.outer(k, x) * self.wavenumber_unit)
+
+    def mode_slopes(self, x: np.ndarray) -> np.ndarray:
+        """dY_k/dx at x for all modes, shape (N_m, x.size)."""
+        k = np.arange(1, self.omega2.size + 1)
+        phase = np.outer(k, x) * self.wavenumber_unit
+        return self.mode_amplitude * (k * self.wavenumber_unit)[:, None] * np.cos(phase)
+
+    def block_mode_weights(self, block: int) -> np.ndarray:
+        """Z_s,i = Σ_r w_r s_r for block i (1..N−1): w_r = √(2/N) sin(rπi/N)."""
+        n = self.n_spacings
+        r = np.arange(1, n)
+        return math.sqrt(2.0 / n) * np.sin(r * math.pi * block / n)
+
+
+def _track_system(scenario: Scenario) -> _TrackSystem:
+    """Track arrays for the scenario's rail length and mode count."""
+    track = scenario.track
+    length = scenario.rail_length
+    n_spacings = round(length / track.block_spacing)
+    k = np.arange(1, scenario.rail_modes + 1)
+    omega2 = track.bending_stiffness / track.rail_mass * (k * math.pi / length) ** 4
+    # sin(kπi/N) at the blocks equals σ sin(ρπi/N) with ρ = k mod 2N folded into 1..N−1
+    remainder = k % (2 * n_spacings)
+    upper = remainder > n_spacings
+    fold = np.where(upper, 2 * n_spacings - remainder, remainder)
+    coupled = (fold > 0) & (fold < n_spacings)
+    return _TrackSystem(
+        length=length, n_spacings=n_spacings, omega2=omega2,
+        fold_index=np.where(coupled, fold - 1, -1).astype(np.int64),
+        fold_sign=np.where(coupled, np.where(upper, -1.0, 1.0), 0.0),
+        block_gain=1.0 / math.sqrt(track.rail_mass * track.block_spacing),
+        mode_amplitude=math.sqrt(2.0 / (track.rail_mass * length)),
+        fastener_k=track.fastener_stiffness, fastener_c=track.fastener_damping,
+        pad_k=track.pad_stiffness, pad_c=track.pad_damping, block_mass=track.block_mass)
+
+
+def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
+    """Per-car mass, stiffness, damping and gravity of the one-rail vehicle model.
+
+    Every mass and inertia is halved (one rail), suspensions are per side (MODEL.md §1). The
+    single bogie carries a quarter of the car body in bounce only; a full car has body bounce
+    and pitch, two bogies in bounce and pitch and four wheelsets. Longitudinal positions grow
+    backwards along the train, so the wheel order follows ``Train.axle_offsets``.
+    """
+    veh, train = scenario.vehicle, scenario.train
+    half_wheelbase = 0.5 * train.wheelbase
+    if train.single_bogie:
+        # DOFs: body bounce, bogie bounce, bogie pitch, wheelset 1, wheelset 2
+        masses = [veh.car_body_mass / 4, veh.bogie_mass / 2, veh.bogie_pitch_inertia / 2,
+                  veh.wheelset_mass / 2, veh.wheelset_mass / 2]
+        translational = [True, True, False, True, True]
+        body_point = [{0: 1.0}]  # secondary attachment on the body, per bogie
+        bogies = [(1, 2)]
+        wheels = [3, 4]
+    else:
+        # DOFs: body bounce, body pitch, (bogie bounce, bogie pitch) × 2, wheelsets 1–4
+        masses = [veh.car_body_mass / 2, scenario.car_body_pitch_inertia / 2,
+                  veh.bogie_mass / 2, veh.bogie_pitch_inertia / 2,
+                  veh.bogie_mass / 2, veh.bogie_pitch_inertia / 2] + [veh.wheelset_mass / 2] * 4
+        translational = [True, False, True, False, True, False, True, True, True, True]
+        half_bogie_distance = 0.5 * train.bogie_distance
+        body_point = [{0: 1.0, 1: -half_bogie_distance}, {0: 1.0, 1: half_bogie_distance}]
+        bogies = [(2, 3), (4, 5)]
+        wheels = [6, 7, 8, 9]
+    n_dof = len(masses)
+    stiffness = np.zeros((n_dof, n_dof))
+    damping = np.zeros((n_dof, n_dof))
+
+    def spring(k, c, coefficients):
+        """Add a spring–dashpot acting on the relative displacement Σ a_i u_i."""
+        a = np.zeros(n_dof)
+        for dof, coefficient in coefficients.items():
+            a[dof] = coefficient
+        stiffness[:] += k * np.outer(a, a)
+        damping[:] += c * np.outer(a, a)
+
+    for b, (bounce, pitch) in enumerate(bogies):
+        spring(veh.secondary_stiffness, veh.secondary_damping, {**body_point[b], bounce: -1.0})
+        for w, lever in enumerate((-half_wheelbase, half_wheelbase)):
+            spring(veh.primary_stiffness, veh.primary_damping,
+                   {bounce: 1.0, pitch: lever, wheels[2 * b + w]: -1.0})
+    mass = np.array(masses)
+    gravity = np.where(translational, mass * GRAVITY, 0.0)
+    n_cars = 1 if train.single_bogie else train.n_cars
+    return _VehicleSystem(
+        inv_mass=np.tile(1.0 / mass, (n_cars, 1)),
+        stiffness=np.tile(stiffness, (n_cars, 1, 1)),
+        damping=np.tile(damping, (n_cars, 1, 1)),
+        gravity_force=np.tile(gravity, (n_cars, 1)),
+        wheel_dof=np.tile(np.array(wheels, dtype=np.int64), (n_cars, 1)),
+        body_dof=0)
+
+
+def _vehicle_static(vehicle: _VehicleSystem, wheel_disp: np.ndarray,
+                    wheel_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vehicle equilibrium on wheelsets at given displacements (and quasi-static velocities).
+
+    Returns the flat DOF displacements and velocities and the wheel–rail forces (N), which do
+    not depend on the wheel displacements (the vehicle is statically determinate).
+    """
+    n_cars, n_dof = vehicle.inv_mass.shape
+    per_car = vehicle.wheel_dof.shape[1]
+    u = np.zeros(n_cars * n_dof)
+    v = np.zeros(n_cars * n_dof)
+    force = np.zeros(n_cars * per_car)
+    for car in range(n_cars):
+        wheels = vehicle.wheel_dof[car]
+        others = np.setdiff1d(np.arange(n_dof), wheels)
+        k = vehicle.stiffness[car]
+        u_w = wheel_disp[car * per_car:(car + 1) * per_car]
+        v_w = wheel_vel[car * per_car:(car + 1) * per_car]
+        k_oo, k_ow = k[np.ix_(others, others)], k[np.ix_(others, wheels)]
+        u_o = np.linalg.solve(k_oo, vehicle.gravity_force[car, others] - k_ow @ u_w)
+        v_o = np.linalg.solve(k_oo, -k_ow @ v_w)
+        base = car * n_dof
+        u[base + others], u[base + wheels] = u_o, u_w
+        v[base + others], v[base + wheels] = v_o, v_w
+        force[car * per_car:(car + 1) * per_car] = (
+            vehicle.gravity_force[car, wheels] - k[np.ix_(wheels, others)] @ u_o
+            - k[np.ix_(wheels, wheels)] @ u_w)
+    return u, v, force
+
+
+def _track_static(track: _TrackSystem, modal_load: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Static rail modal coordinates q and block modal coordinates s under modal loads.
+
+    Solves ω_k² q_k + σ_k b F̂_ρ = P_k, F̂_ρ = K_r (b Σ σ_k q_k − s_ρ) = K_s s_ρ exactly, one
+    block mode at a time (O(N_m)); the same linear map turns modal load *rates* into the
+    quasi-static velocities.
+    """
+    coupled = track.fold_index >= 0
+    index = track.fold_index[coupled]
+    sign = track.fold_sign[coupled]
+    w2 = track.omega2[coupled]
+    n_block_modes = track.n_spacings - 1
+    free_disp = np.bincount(index, sign * modal_load[coupled] / w2, n_block_modes)
+    compliance = np.bincount(index, 1.0 / w2, n_block_modes)
+    k_series = track.fastener_k * track.pad_k / (track.fastener_k + track.pad_k)
+    b = track.block_gain
+    block_force = k_series * b * free_disp / (1.0 + k_series * b * b * compliance)
+    q = modal_load / track.omega2
+    q[coupled] -= sign * b * block_force[index] / w2
+    return q, block_force / track.pad_k
+
+
+@dataclass(frozen=True)
+class _Model:
+    """Everything the kernel needs for one passage, as plain numbers and arrays."""
+
+    track: _TrackSystem
+    vehicle: _VehicleSystem
+    wheel_x0: np.ndarray  # wheel positions at t = 0 (m), leading axle first
+    speed: float  # m/s
+    hertz_constant: float  # G (m/N^(2/3))
+    prescribed_load: np.ndarray  # wheel loads (N) replacing Hertz contact, or [-1.0]
+    eta_grid: np.ndarray  # irregularity η (m) on a uniform grid
+    eta_start: float
+    eta_step: float
+    monitored_block: int  # block index i (1..N−1) whose invert force is recorded
+
+    @property
+    def monitored_x(self) -> float:
+        """Position of the monitored block (m)."""
+        return self.monitored_block * self.track.length / self.track.n_spacings
+
+    def profile(self, x: np.ndarray) -> np.ndarray:
+        """η at x, interpolated exactly as in the kernel (m)."""
+        grid_x = self.eta_start + self.eta_step * np.arange(self.eta_grid.size)
+        return np.interp(x, grid_x, self.eta_grid)
+
+
+def _build_model(scenario: Scenario, duration: float) -> _Model:
+    """Kernel data for ``scenario``, with the irregularity sampled where the wheels run."""
+    track = _track_system(scenario)
+    speed = scenario.train.speed
+    monitored = track.n_spacings // 2
+    monitored_x = monitored * track.length / track.n_spacings
+    wheel_x0 = (monitored_x - scenario.numerics.approach_distance
+                - np.asarray(scenario.train.axle_offsets, dtype=float))
+    irr = scenario.irregularity
+    eta_step = min(PROFILE_GRID_STEP, irr.wavelength_min / 100.0)
+    start = wheel_x0.min() - eta_step
+    n_grid = math.ceil((wheel_x0.max() + speed * duration - start) / eta_step) + 2
+    grid = start + eta_step * np.arange(n_grid)
+    from model.irregularity import profile_for  # sibling stage; imported where it is used
+
+    return _Model(
+        track=track, vehicle=_vehicle_system(scenario), wheel_x0=wheel_x0, speed=speed,
+        hertz_constant=scenario.track.hertz_constant, prescribed_load=np.array([-1.0]),
+        eta_grid=np.ascontiguousarray(profile_for(irr, grid), dtype=float),
+        eta_start=float(start), eta_step=eta_step, monitored_block=monitored)
+
+
+def _static_loads(model: _Model) -> np.ndarray:
+    """Wheel–rail forces (N) at equilibrium: the prescribed loads or the vehicle's weight."""
+    if model.prescribed_load[0] >= 0.0:
+        return model.prescribed_load.copy()
+    n_wheels = model.wheel_x0.size
+    return _vehicle_static(model.vehicle, np.zeros(n_wheels), np.zeros(n_wheels))[2]
+
+
+def _initial_state(model: _Model) -> dict[str, np.ndarray]:
+    """Static equilibrium under the wheel loads, with the quasi-static rates of steady motion.
+
+    Displacements: track under the static wheel loads, wheels at rail + η + Hertz compression
+    G p^{2/3}, vehicle in equilibrium on them. Velocities: the time derivative of that
+    solution as the loads move at the train speed, so a smooth-rail run starts without a drop
+    or a jolt.
+    """
+    track, vehicle, x0 = model.track, model.vehicle, model.wheel_x0
+    loads = _static_loads(model)
+    shapes = track.mode_shapes(x0)
+    slopes = track.mode_slopes(x0)
+    q, s = _track_static(track, shapes @ loads)
+    qd, sd = _track_static(track, model.speed * (slopes @ loads))
+    eta = model.profile(x0)
+    eta_slope = (model.profile(x0 + 0.5 * model.eta_step)
+                 - model.profile(x0 - 0.5 * model.eta_step)) / model.eta_step
+    wheel_disp = shapes.T @ q + eta + model.hertz_constant * loads ** (2.0 / 3.0)
+    wheel_vel = model.speed * (slopes.T @ q + eta_slope) + shapes.T @ qd
+    u, ud, _ = _vehicle_static(vehicle, wheel_disp, wheel_vel)
+    return {"q": q, "qd": qd, "qdd": np.zeros_like(q), "qdd_prev": np.zeros_like(q),
+            "s": s, "sd": sd, "sdd": np.zeros_like(s), "sdd_prev": np.zeros_like(s),
+            "u": u, "ud": ud, "udd": np.zeros_like(u), "udd_prev": np.zeros_like(u)}
+
+
+def _integrate(model: _Model, state: dict[str, np.ndarray], n_steps: int, dt: float,
+               progress: Callable[[float], None] | None = None) -> dict:
+    """Run the kernel for ``n_steps`` from ``state`` (modified in place); outputs and status.
+
+    The kernel runs in at most ``PROGRESS_CALLS`` chunks so ``progress`` can be told the
+    fraction done. Returns a dict of output arrays (index 0 = initial state) plus ``"diverged"``
+    (output index where the response diverged, or None), ``"events"`` and ``"n_events"``.
+    """
+    track, vehicle = model.track, model.vehicle
+    n_wheels = model.wheel_x0.size
+    n_bodies = vehicle.inv_mass.shape[0]
+    nt = n_steps + 1
+    out = {"block_force": np.zeros(nt), "block_disp": np.zeros(nt), "rail_disp": np.zeros(nt),
+           "wheel_force": np.zeros((n_wheels, nt)), "wheel_acc": np.zeros((n_wheels, nt)),
+           "body_acc": np.zeros((n_bodies, nt))}
+    block_weight = track.block_mode_weights(model.monitored_block)
+    rail_weight = track.mode_shapes(np.array([model.monitored_x]))[:, 0].copy()
+    track_args = (track.omega2, track.fold_index, track.fold_sign, track.block_gain,
+                  track.mode_amplitude, track.wavenumber_unit, track.fastener_k,
+                  track.fastener_c, track.pad_k, track.pad_c, track.block_mass)
+    vehicle_args = (vehicle.inv_mass, vehicle.stiffness, vehicle.damping,
+                    vehicle.gravity_force, vehicle.wheel_dof)
+    wheel_args = (model.wheel_x0, model.speed, model.hertz_constant, model.prescribed_load,
+                  model.eta_grid, model.eta_start, model.eta_step)
+    st = state
+    scratch = (np.empty((track.omega2.size, n_wheels)), np.empty((3, n_wheels)),
+               np.empty(n_wheels),
+               np.empty(track.n_spacings - 1), np.empty(track.n_spacings - 1),
+               np.empty(track.n_spacings - 1), np.empty(n_wheels), np.empty(n_wheels))
+    wheel_force = np.empty(n_wheels)
+    kernels.accelerations(0.0, st["q"], st["qd"], st["qdd"], st["s"], st["sd"], st["sdd"],
+                          st["u"], st["ud"], st["udd"], *track_args, *vehicle_args,
+                          *wheel_args, *scratch, wheel_force)
+    kernels.record(0, st["q"], st["s"], st["sd"], st["udd"], vehicle.inv_mass.shape[1],
+                   vehicle.wheel_dof, vehicle.body_dof, track.pad_k, track.pad_c,
+                   block_weight, rail_weight, wheel_force, out["block_force"],
+                   out["block_disp"], out["rail_disp"], out["wheel_force"], out["wheel_acc"],
+                   out["body_acc"])
+    in_contact = wheel_force > 0.0
+    open_event = np.full(n_wheels, -1, dtype=np.int64)
+    events = np.zeros((MAX_CONTACT_EVENTS, 4))
+    event_count = np.zeros(1, dtype=np.int64)
+    for j in np.flatnonzero(~in_contact):  # already off the rail at t = 0
+        events[event_count[0]] = (j, 0.0, model.wheel_x0[j], -1.0)
+        open_event[j] = event_count[0]
+        event_count[0] += 1
+    diverged = None
+    chunk = max(1, math.ceil(n_steps / PROGRESS_CALLS))
+    for start in range(0, n_steps, chunk):
+        stop = min(start + chunk, n_steps)
+        status = kernels.advance(
+            start, stop, dt, ZHAI_PHI, ZHAI_PSI,
+            st["q"], st["qd"], st["qdd"], st["qdd_prev"], st["s"], st["sd"], st["sdd"],
+            st["sdd_prev"], st["u"], st["ud"], st["udd"], st["udd_prev"],
+            *track_args, *vehicle_args, vehicle.body_dof, *wheel_args,
+            block_weight, rail_weight, DIVERGENCE_COMPRESSION,
+            in_contact, open_event, events, event_count,
+            out["block_force"], out["block_disp"], out["rail_disp"], out["wheel_force"],
+            out["wheel_acc"], out["body_acc"])
+        if status != kernels.RUNNING:
+            diverged = int(status)
+            break
+        if not all(np.all(np.isfinite(a)) for a in (st["q"], st["s"], st["u"])):
+            diverged = stop  # a mode the outputs do not see has blown up
+            break
+        if progress is not None:
+            progress(stop / n_steps)
+    n_events = int(event_count[0])
+    events = events[:min(n_events, MAX_CONTACT_EVENTS)]
+    still_open = events[:, 3] < 0.0
+    last_t = (diverged if diverged is not None else n_steps) * dt
+    events[still_open, 3] = last_t
+    return {**out, "diverged": diverged, "events": events, "n_events": n_events}
+
+
+# ---- public API -----------------------------------------------------------------------------
+def zhai_damped_limit(omega: float, gamma: float) -> float:
+    """Largest stable Δt of Zhai's method (φ = ψ = ½) for ẍ + γẋ + ω²x = 0 (s).
+
+    Δt_max = 2(√(ω² + γ²) − γ)/ω², i.e. ωΔt < 2(√(1 + 4ζ²) − 2ζ) with γ = 2ζω: 2/ω without
+    damping (verified against the amplification matrix in the tests).
+    """
+    return 2.0 * (math.sqrt(omega * omega + gamma * gamma) - gamma) / (omega * omega)
+
+
+def stable_time_step(scenario: Scenario) -> float:
+    """Explicit stability limit estimate for the scenario, with a safety factor (s).
+
+    The limit is the smallest :func:`zhai_damped_limit` over three subsystems, each with its
+    highest frequency bounded from above:
+
+    - rail: highest mode (EI/m_r)(N_m π/L)⁴ plus the fastener stiffness seen by a mode,
+      n_f K_r/(m_r L_s) (n_f rail modes share one block mode when N_m ≥ N), plus the
+      linearised Hertz spring of one wheel, k_H Σ_k Y_k² ≈ k_H N_m/(m_r L); damping
+      n_f C_r/(m_r L_s);
+    - blocks: (K_r + K_s)/M_s, damping (C_r + C_s)/M_s;
+    - vehicle: Gershgorin bound of M⁻¹K with k_H on the wheelsets, damping likewise.
+
+    k_H = (3/2) p^{1/3}/G is taken at ``HERTZ_OVERLOAD`` (2) times the static wheel load, and the
+    result is multiplied by ``STABILITY_SAFETY`` (0.9).
+
+    Parameters
+    ----------
+    scenario : Scenario
+
+    Returns
+    -------
+    float
+        Largest recommended Δt (s).
+    """
+    track = scenario.track
+    system = _track_system(scenario)
+    n_modes = system.omega2.size
+    load = HERTZ_OVERLOAD * scenario.vehicle.static_wheel_load
+    k_hertz = 1.5 * load ** (1.0 / 3.0) / track.hertz_constant
+    shared = np.bincount(system.fold_index[system.fold_index >= 0]).max(initial=1)
+    per_block = 1.0 / (track.rail_mass * track.block_spacing)
+    rail = zhai_damped_limit(
+        math.sqrt(system.omega2[-1] + shared * track.fastener_stiffness * per_block
+                  + k_hertz * n_modes / (track.rail_mass * system.length)),
+        shared * track.fastener_damping * per_block)
+    blocks = zhai_damped_limit(
+        math.sqrt((track.fastener_stiffness + track.pad_stiffness) / track.block_mass),
+        (track.fastener_damping + track.pad_damping) / track.block_mass)
+    vehicle = _vehicle_system(scenario)
+    stiffness = np.abs(vehicle.stiffness[0])
+    stiffness[vehicle.wheel_dof[0], vehicle.wheel_dof[0]] += k_hertz
+    inv_mass = vehicle.inv_mass[0]
+    wheels = zhai_damped_limit(math.sqrt(np.max(inv_mass * stiffness.sum(axis=1))),
+                               np.max(inv_mass * np.abs(vehicle.damping[0]).sum(axis=1)))
+    return STABILITY_SAFETY * min(rail, blocks, wheels)
+
+
+def _n_steps(scenario: Scenario) -> int:
+    """Time steps covering the passage."""
+    return math.ceil(scenario.passage_duration / scenario.numerics.dt - 1e-9)
+
+
+def check_inputs(scenario: Scenario) -> None:
+    """Refuse inputs the simulation cannot handle, before any computation.
+
+    Calls ``scenario.validate()`` (which also refuses too few rail modes, N_m < L/(2L_s)), then
+    checks the speed, the rail length against the required end margin, the time step against
+    :func:`stable_time_step` and the size of the output.
+
+    Raises
+    ------
+    ValueError
+        With a message naming the parameter, its value and the allowed range.
+    """
+    scenario.validate()
+    numerics, train = scenario.numerics, scenario.train
+    if not train.speed_kmh > 0.0:
+        raise ValueError(f"train.speed_kmh = {train.speed_kmh!r} is outside the allowed range "
+                         f"(0, 400] km/h")
+    margin = 0.5 * scenario.rail_length - numerics.approach_distance - train.axle_span
+    if margin < MIN_RAIL_END_MARGIN - 1e-9:
+        raise ValueError(
+            f"numerics.rail_end_margin = {numerics.rail_end_margin:g} m makes the rail too "
+            f"short (L = {scenario.rail_length:g} m leaves {margin:g} m between the train and a "
+            f"rail end); allowed range [{MIN_RAIL_END_MARGIN:g}, inf) m (MODEL.md §2)")
+    limit = stable_time_step(scenario)
+    if numerics.dt > limit:
+        raise ValueError(
+            f"numerics.dt = {numerics.dt:g} s is above the explicit stability limit of this "
+            f"scenario ({scenario.rail_modes} rail modes, highest ω ≈ "
+            f"{math.sqrt(_track_system(scenario).omega2[-1]):.4g} rad/s); allowed range "
+            f"(0, {limit:.4g}] s: lower the time step or the number of rail modes")
+    n_channels = 3 + 2 * train.n_wheels + (1 if train.single_bogie else train.n_cars)
+    n_values = (_n_steps(scenario) + 1) * n_channels
+    if n_values > MAX_OUTPUT_VALUES:
+        raise ValueError(
+            f"numerics.dt = {numerics.dt:g} s gives {_n_steps(scenario)} time steps for a "
+            f"{scenario.passage_duration:.3g} s passage, {n_values:.3g} output values in all; "
+            f"allowed up to {MAX_OUTPUT_VALUES:.3g}: raise the time step or the speed")
+
+
+def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
+    """Quasi-static block displacement on a Winkler beam (BOEF) under the passing train (m).
+
+    Zimmermann: w(ξ) = (Pβ/2k) e^{−β|ξ|}(cos β|ξ| + sin β|ξ|) per static wheel load P,
+    k = K_r K_s/((K_r + K_s) L_s), superposed over the wheels at their positions at ``t_s``; the
+    block, in series under the fastener, moves K_r/(K_r + K_s) of the rail deflection.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    t_s : ndarray
+        Times (s) from the start of the passage.
+
+    Returns
+    -------
+    ndarray
+        Block displacement (m, down +), same shape as ``t_s``.
+    """
+    track, train = scenario.track, scenario.train
+    beta, modulus = track.winkler_beta, track.winkler_modulus
+    x_mon = 0.5 * scenario.rail_length
+    x0 = x_mon - scenario.numerics.approach_distance - np.asarray(train.axle_offsets)
+    xi = np.abs(x0[:, None] + train.speed * np.asarray(t_s)[None, :] - x_mon) * beta
+    rail = (scenario.vehicle.static_wheel_load * beta / (2.0 * modulus)
+            * np.exp(-xi) * (np.cos(xi) + np.sin(xi))).sum(axis=0)
+    return rail * track.fastener_stiffness / (track.fastener_stiffness + track.pad_stiffness)
+
+
+def simulate(scenario: Scenario,
+             progress: Callable[[float], None] | None = None) -> VehicleTrackResult:
+    """Passage of the train (or single bogie) over the monitored block at mid-rail.
+
+    The leading axle starts ``numerics.approach_distance`` before the monitored block and the
+    run ends when the trailing axle is the same distance past it (``scenario.passage_duration``),
+    from static equilibrium, at ``numerics.dt``.
+
+    If the response diverges (it should not once :func:`check_inputs` has passed), the run
+    stops there: the result is flagged ``unstable``, its arrays end at the last valid sample and
+    ``warnings`` says why. Callers must check ``unstable`` before using the record.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        All inputs; checked by :func:`check_inputs` first.
+    progress : callable(fraction), optional
+        Called with the fraction done (0–1) about 40 times.
+
+    Returns
+    -------
+    VehicleTrackResult
+
+    Raises
+    ------
+    ValueError
+        From :func:`check_inputs`.
+    """
+    check_inputs(scenario)
+    dt = scenario.numerics.dt
+    n_steps = _n_steps(scenario)
+    model = _build_model(scenario, n_steps * dt)
+    state = _initial_state(model)
+    run = _integrate(model, state, n_steps, dt, progress)
+    nt = n_steps + 1 if run["diverged"] is None else run["diverged"]
+    t = dt * np.arange(nt)
+    offsets = np.asarray(scenario.train.axle_offsets, dtype=float)
+    warnings = []
+    if run["diverged"] is not None:
+        warnings.append(
+            f"the integration diverged at t = {nt * dt:.4g} s (a wheel–rail compression passed "
+            f"{DIVERGENCE_COMPRESSION * 1e3:g} mm or became non-finite) and was stopped; the "
+            f"record ends there. The time step {dt:g} s is too large for this scenario: use a "
+            f"smaller numerics.dt (estimated limit {stable_time_step(scenario):.3g} s).")
+    events = _contact_events(run["events"])
+    if run["n_events"]:
+        warnings.append(_contact_loss_message(events, run["n_events"]))
+    return VehicleTrackResult(
+        t_s=t, block_force_N=run["block_force"][:nt], block_disp_m=run["block_disp"][:nt],
+        rail_disp_m=run["rail_disp"][:nt], wheel_force_N=run["wheel_force"][:, :nt],
+        wheel_acc_m_s2=run["wheel_acc"][:, :nt], car_body_acc_m_s2=run["body_acc"][:, :nt],
+        axle_pass_times_s=(scenario.numerics.approach_distance + offsets) / model.speed,
+        winkler_block_disp_m=winkler_block_displacement(scenario, t),
+        monitored_block_x_m=model.monitored_x, contact_loss=events,
+        unstable=run["diverged"] is not None, warnings=warnings,
+        static_wheel_load_N=float(_static_loads(model)[0]), dt_s=dt,
+        stable_dt_s=stable_time_step(scenario), n_rail_modes=model.track.omega2.size,
+        rail_length_m=model.track.length, speed_m_s=model.speed)
+
+
+def _contact_events(rows: np.ndarray) -> np.ndarray:
+    """Kernel event rows (wheel, t_start, x_start, t_end) as CONTACT_EVENT_DTYPE records."""
+    events = np.zeros(rows.shape[0], dtype=CONTACT_EVENT_DTYPE)
+    events["wheel"] = rows[:, 0].astype(np.int64)
+    events["t_s"] = rows[:, 1]
+    events["x_m"] = rows[:, 2]
+    events["duration_s"] = rows[:, 3] - rows[:, 1]
+    return events
+
+
+def _contact_loss_message(events: np.ndarray, n_events: int) -> str:
+    """Human-readable summary of loss-of-contact events."""
+    shown = "; ".join(
+        f"wheel {e['wheel']} at t = {e['t_s']:.4f} s, x = {e['x_m']:.2f} m for "
+        f"{e['duration_s'] * 1e3:.2f} ms" for e in events[:5])
+    more = f" (and {n_events - 5} more)" if n_events > 5 else ""
+    return f"loss of wheel–rail contact, {n_events} event(s): {shown}{more}"
