@@ -1,0 +1,141 @@
+"""Static, self-contained HTML report of one run: the dashboard's plots, summary and scenario.
+
+All JavaScript and CSS are inlined, so the file opens offline. Command line::
+
+    python -m dashboard.export --preset paper --out report.html
+    python -m dashboard.export --scenario scenario.json --set train.speed_kmh=60 --out report.html
+"""
+
+from __future__ import annotations
+
+import argparse
+import html
+import io
+import sys
+from pathlib import Path
+
+import panel as pn
+from bokeh.document import Document
+from bokeh.models import ImportedStyleSheet, InlineStyleSheet
+from bokeh.resources import INLINE
+from panel.io.resources import CDN_DIST, DIST_DIR
+
+from dashboard import plots
+from model.__main__ import load_scenario
+from model.params import Scenario
+from model.pipeline import Results, run
+
+REPORT_TITLE = "tunnelsettle report"
+# Panel's page template links its favicons from a CDN; empty values keep the file offline.
+_OFFLINE_TEMPLATE_VARIABLES = {"app_favicon": "", "apple_icon": ""}
+
+
+def items_html(items: list[plots.SummaryItem], css_class: str) -> str:
+    """HTML block of labelled key numbers; each value carries ``data-key`` for tests."""
+    cells = "".join(
+        f'<div class="item"><div class="label">{html.escape(item.label)}</div>'
+        f'<div class="value" data-key="{item.key}">{html.escape(item.text)}</div></div>'
+        for item in items)
+    return f'<div class="{css_class}">{cells}</div>'
+
+
+ITEMS_CSS = """
+.summary, .soil { display: flex; flex-wrap: wrap; gap: 8px; }
+.item { border: 1px solid #d0d7de; border-radius: 6px; padding: 6px 10px; min-width: 150px; }
+.item .label { font-size: 12px; color: #57606a; }
+.item .value { font-size: 18px; font-weight: 600; }
+"""
+"""Style of :func:`items_html` blocks, shared by the dashboard and the report."""
+
+
+def build_report(results: Results) -> pn.Column:
+    """Panel layout of the report: summary, warnings, every plot and the full scenario JSON."""
+    scenario = results.scenario
+    warnings = "".join(f"<li>{html.escape(w)}</li>" for w in results.warnings)
+    warning_block = (f'<div class="warnings"><h3>Warnings</h3><ul>{warnings}</ul></div>'
+                     if warnings else "")
+    header = pn.pane.HTML(
+        f"<h1>{REPORT_TITLE}</h1>"
+        "<p>Train → track → tunnel → soil: peak dynamic displacement below a metro tunnel in "
+        "soft soil. Displacements are positive downward.</p>"
+        "<h3>Key numbers</h3>" + items_html(plots.summary_items(results), "summary")
+        + "<h3>Derived soil quantities</h3>" + items_html(plots.soil_items(scenario.soil), "soil")
+        + warning_block,
+        stylesheets=[ITEMS_CSS], sizing_mode="stretch_width")
+    figures = pn.GridBox(
+        *[pn.pane.HoloViews(spec.draw(results), sizing_mode="stretch_width",
+                            css_classes=[f"plot-{spec.key}"]) for spec in plots.PLOTS],
+        ncols=2, sizing_mode="stretch_width")
+    scenario_block = pn.pane.HTML(
+        "<h3>Scenario</h3><details open><summary>All inputs (JSON, SI units except "
+        f"km/h)</summary><pre class=\"scenario-json\">{html.escape(results.scenario_json)}"
+        "</pre></details>", sizing_mode="stretch_width")
+    return pn.Column(header, figures, scenario_block, sizing_mode="stretch_width")
+
+
+def _packaged_stylesheet(sheet):
+    """Inline copy of a stylesheet Panel links from its CDN, read from the installed package."""
+    if not isinstance(sheet, ImportedStyleSheet) or not sheet.url.startswith(CDN_DIST):
+        return sheet
+    path = DIST_DIR / sheet.url.removeprefix(CDN_DIST).split("?")[0]
+    return InlineStyleSheet(css=path.read_text(encoding="utf-8")) if path.exists() else sheet
+
+
+def report_html(results: Results) -> str:
+    """The report as one self-contained HTML document (inline JS and CSS)."""
+    document = Document()
+    root = build_report(results).get_root(document)
+    document.add_root(root)
+    # INLINE resources inline the JavaScript but Panel still links component stylesheets from
+    # its CDN (holoviz/panel#6759); swap them for the packaged files so the file works offline.
+    for model in root.references():
+        sheets = getattr(model, "stylesheets", None)
+        if sheets:
+            model.stylesheets = [_packaged_stylesheet(sheet) for sheet in sheets]
+    buffer = io.StringIO()
+    pn.io.save.save(document, buffer, title=REPORT_TITLE, resources=INLINE,
+                    template_variables=_OFFLINE_TEMPLATE_VARIABLES)
+    return buffer.getvalue()
+
+
+def write_report(results: Results, path: Path) -> Path:
+    """Write :func:`report_html` to ``path`` (UTF-8) and return the path."""
+    path = Path(path)
+    path.write_text(report_html(results), encoding="utf-8")
+    return path
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``python -m dashboard.export``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m dashboard.export",
+        description="Run a scenario and write a self-contained HTML report.")
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--preset", default="paper", choices=Scenario.preset_names(),
+                        help="named scenario from assets/presets.json (default: paper)")
+    source.add_argument("--scenario", type=Path, help="scenario JSON file")
+    parser.add_argument("--set", dest="overrides", action="append", default=[],
+                        metavar="SECTION.PARAM=VALUE",
+                        help="override one parameter, e.g. train.speed_kmh=60 (repeatable)")
+    parser.add_argument("--out", type=Path, required=True, help="HTML file to write")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the process exit code (2 for bad input)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        results = run(load_scenario(args), cache=None)
+        write_report(results, args.out)
+    except (ValueError, KeyError, OSError) as error:
+        message = error.args[0] if isinstance(error, KeyError) and error.args else error
+        parser.exit(2, f"error: {message}\n")
+    for warning in results.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    print(f"report written to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,373 @@
+"""Dashboard without a browser: plots carry the pipeline's numbers, the app builds and reacts.
+
+All runs use a cheap scenario (single bogie at 100 km/h, 11 output depths) and the real
+pipeline; one stage cache per module keeps repeated stages out of the test time.
+"""
+
+import html
+import io
+import json
+import re
+
+import holoviews as hv
+import numpy as np
+import panel as pn
+import param
+import pytest
+
+from dashboard import plots
+from dashboard.app import HIDDEN, PRIMARY, Dashboard
+from dashboard.export import main as export_main
+from dashboard.export import report_html
+from model.params import SECTIONS, Scenario
+from model.pipeline import StageCache, run
+
+MM = 1e3
+
+
+def cheap_scenario() -> Scenario:
+    """Single bogie at 100 km/h on a ~65 m rail, 11 output depths: a run of about a second."""
+    scenario = Scenario.preset("single_bogie")
+    scenario.train.speed_kmh = 100.0
+    scenario.numerics.n_depths = 11
+    return scenario
+
+
+@pytest.fixture(scope="module")
+def cache():
+    return StageCache()
+
+
+@pytest.fixture(scope="module")
+def results(cache):
+    return run(cheap_scenario(), cache=cache)
+
+
+@pytest.fixture
+def dashboard(cache):
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    board.refresh()
+    return board
+
+
+def _curves(element):
+    """Every Curve/Scatter of an element or overlay, by label."""
+    layers = element.values() if isinstance(element, hv.Overlay) else [element]
+    return {layer.label: layer for layer in layers}
+
+
+def _pane_data(board, key):
+    """(x, y) arrays of the first curve shown in a dashboard plot."""
+    curve = next(iter(_curves(board.plot_panes[key].object).values()))
+    return curve.dimension_values(0), curve.dimension_values(1)
+
+
+# ---- plots.py -------------------------------------------------------------------------------
+def test_decimation_keeps_extremes_ends_and_order():
+    """A 100 001-sample record thinned to ≤ 1000 points keeps its exact max, min, ends, order."""
+    x = np.linspace(0.0, 1.0, 100_001)
+    y = np.sin(40 * np.pi * x) * np.exp(-x) + 1e-3 * np.cos(997 * x)
+    xd, yd = plots.decimate_min_max(x, y, max_points=1000)
+    assert xd.size <= 1000
+    assert yd.max() == y.max() and yd.min() == y.min()
+    assert (xd[0], xd[-1]) == (x[0], x[-1])
+    assert np.all(np.diff(xd) > 0)
+    np.testing.assert_array_equal(yd, np.interp(xd, x, y))  # points are samples, not averages
+
+
+def test_decimation_leaves_short_records_alone():
+    x = np.arange(10.0)
+    xd, yd = plots.decimate_min_max(x, x**2, max_points=10)
+    assert xd is x and np.array_equal(yd, x**2)
+
+
+def test_time_plots_show_the_pipeline_numbers_in_display_units(results):
+    """Peaks on screen equal the summary's (exact: decimation keeps extremes; ×1e3 for mm/kN)."""
+    summary = results.summary()
+    disp = _curves(plots.block_displacement_plot(results))
+    assert set(disp) == {"Vehicle–track model", "Winkler beam (BOEF)"}
+    assert disp["Vehicle–track model"].dimension_values(1).max() == pytest.approx(
+        summary["peak_block_disp_m"] * MM, rel=1e-12)
+    assert disp["Winkler beam (BOEF)"].dimension_values(1).max() == pytest.approx(
+        results.vehicle_track.winkler_block_disp_m.max() * MM, rel=1e-12)
+    load = plots.invert_load_plot(results)
+    assert load.dimension_values(1).max() == pytest.approx(
+        summary["peak_invert_force_N"] / 1e3, rel=1e-12)
+    assert load.dimensions()[0].pprint_label == "Time (s)"
+    assert load.dimensions()[1].pprint_label.endswith("(kN)")
+
+
+def test_psd_plots_are_positive_and_within_the_soil_frequency_limit(results):
+    limit = results.scenario.numerics.soil_max_frequency
+    for draw, unit in ((plots.load_psd_plot, "(kN/m)²/Hz"), (plots.interface_psd_plot, "mm²/Hz")):
+        curve = draw(results)
+        f, p = curve.dimension_values(0), curve.dimension_values(1)
+        assert f.size > 10 and np.all(f > 0) and f.max() <= limit and np.all(p > 0)
+        assert curve.dimensions()[1].unit == unit
+    interface = plots.interface_psd_plot(results)
+    f = interface.dimension_values(0)
+    keep = (results.soil.f_hz > 0) & (results.soil.f_hz <= limit)
+    np.testing.assert_allclose(interface.dimension_values(1),
+                               results.soil.interface_psd[keep][np.isin(
+                                   results.soil.f_hz[keep], f)] * MM**2, rtol=1e-12)
+
+
+def test_depth_plot_overlays_both_paper_series_separately(results):
+    layers = _curves(plots.depth_profile_plot(results))
+    assert set(layers) == {"This model", "Paper Fig. 11", "Paper conclusions"}
+    model = layers["This model"]
+    np.testing.assert_allclose(model.dimension_values(0), results.soil.peak_disp_m * MM)
+    np.testing.assert_allclose(model.dimension_values(1), results.soil.depth_m)
+    fig11 = layers["Paper Fig. 11"]
+    np.testing.assert_allclose(fig11.dimension_values(0), [6.72, 2.94])  # MODEL.md §8, mm
+    np.testing.assert_allclose(fig11.dimension_values(1), [0.0, 11.0])
+    conclusions = layers["Paper conclusions"]
+    np.testing.assert_allclose(conclusions.dimension_values(0), [7.27, 0.91])
+    np.testing.assert_allclose(conclusions.dimension_values(1), [0.0, 35.0])
+
+
+def test_reference_data_is_found_from_any_working_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert [s["label"] for s in plots.paper_reference()] == ["Paper Fig. 11",
+                                                             "Paper conclusions"]
+
+
+def test_summary_items_are_the_summary_in_display_units(results):
+    summary = results.summary()
+    items = {item.key: item for item in plots.summary_items(results)}
+    assert items["peak_block_disp"].value == summary["peak_block_disp_m"] * MM
+    assert items["peak_invert_force"].value == summary["peak_invert_force_N"] / 1e3
+    assert items["peak_disp_11m"].value == summary["peak_disp_11m_m"] * MM
+    assert items["peak_disp_deepest"].label.endswith("35 m below")
+    soil = {item.key: item for item in plots.soil_items(results.scenario.soil)}
+    assert soil["soil_s_wave_speed"].value == results.scenario.soil.s_wave_speed
+    assert soil["soil_shear_modulus"].unit == "MPa"
+
+
+# ---- app.py ---------------------------------------------------------------------------------
+def test_app_builds_with_a_widget_for_every_parameter(dashboard):
+    page = dashboard.template()
+    assert isinstance(page, pn.template.BootstrapTemplate)
+    expected = {f"{section}.{name}" for section in SECTIONS
+                for name in getattr(dashboard.scenario, section).param if name != "name"}
+    assert set(dashboard.widgets) == expected - HIDDEN
+    assert set(PRIMARY) <= set(dashboard.widgets)
+    pn.Row(dashboard).get_root()  # the whole layout renders to Bokeh models
+
+
+def test_widgets_take_label_range_and_value_from_the_params(dashboard):
+    """No default or range is repeated in the app: all come from model.params."""
+    for path, widget in dashboard.widgets.items():
+        section, _, name = path.partition(".")
+        obj = getattr(dashboard.scenario, section)
+        p = obj.param[name]
+        assert widget.label == p.label, path
+        if hasattr(widget, "start") and p.softbounds is not None:
+            value = getattr(obj, name)
+            assert (widget.start, widget.end) == (min(p.softbounds[0], value),
+                                                  max(p.softbounds[1], value)), path
+            assert widget.value == value, path
+
+
+def _release(widget, value):
+    """What the browser sends when a slider is released (or a value typed and entered)."""
+    with param.edit_constant(widget):
+        widget.param.update(value=value, value_throttled=value)
+
+
+def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
+    for key, pane in dashboard.plot_panes.items():
+        assert pane.object is not None and not pane.loading, key
+        x, y = _pane_data(dashboard, key)
+        assert x.size > 10 and np.all(np.isfinite(y)), key
+    assert 'data-key="peak_disp_invert"' in dashboard.summary.object
+    assert dashboard.render_counts == {"vehicle_track": 1, "load": 1, "soil": 1}
+    assert dashboard.report_button.disabled is False
+
+
+def test_speed_change_updates_every_plot(dashboard):
+    before = {key: np.concatenate(_pane_data(dashboard, key)) for key in dashboard.plot_panes}
+    _release(dashboard.widgets["train.speed_kmh"], 90.0)
+    assert dashboard.scenario.train.speed_kmh == 90.0
+    assert dashboard.results.scenario.train.speed_kmh == 90.0
+    for key in dashboard.plot_panes:
+        after = np.concatenate(_pane_data(dashboard, key))
+        assert after.shape != before[key].shape or not np.array_equal(after, before[key]), key
+    assert dashboard.render_counts == {"vehicle_track": 2, "load": 2, "soil": 2}
+
+
+def test_soil_change_redraws_only_the_soil_plots(dashboard):
+    shown = {key: pane.object for key, pane in dashboard.plot_panes.items()}
+    summary_before = dashboard.summary.object
+    soil_before = dashboard.soil_summary.object
+    _release(dashboard.widgets["soil.youngs_modulus"], 12e6)
+    assert set(dashboard.results.cached_stages) == {"vehicle_track", "load"}
+    for spec in plots.PLOTS:
+        same = dashboard.plot_panes[spec.key].object is shown[spec.key]
+        assert same == (spec.stage != "soil"), spec.key
+    assert dashboard.render_counts == {"vehicle_track": 1, "load": 1, "soil": 2}
+    assert dashboard.summary.object != summary_before
+    assert dashboard.soil_summary.object != soil_before
+    # doubling E at fixed ν doubles μ (2 × 2.3077 MPa from E = 6 MPa, ν = 0.3)
+    assert "4.615 MPa" in dashboard.soil_summary.object
+    assert 'data-renders="2"' in dashboard.status.object and "cached" in dashboard.status.object
+
+
+def test_invalid_value_gives_a_clear_message_and_changes_nothing(dashboard):
+    widget = dashboard.widgets["soil.youngs_modulus"]
+    results_before = dashboard.results
+    _release(widget, -5.0)
+    alert = dashboard.error_alert
+    assert alert.visible
+    text = alert.object.replace("\\", "")
+    assert "youngs_modulus" in text and "-5.0" in text and "outside the allowed range" in text
+    assert "Traceback" not in text
+    assert dashboard.scenario.soil.youngs_modulus == 6e6
+    assert widget.value == 6e6  # the widget shows the value still in force
+    assert dashboard.results is results_before
+    _release(widget, 8e6)  # a good value clears the message
+    assert not alert.visible
+
+
+def test_inconsistent_inputs_are_reported_not_raised(dashboard):
+    _release(dashboard.widgets["irregularity.wavelength_min"], 60.0)
+    assert dashboard.error_alert.visible
+    text = dashboard.error_alert.object.replace("\\", "")
+    assert "Inconsistent inputs" in text and "wavelength_max" in text
+    assert all(not pane.loading for pane in dashboard.plot_panes.values())
+
+
+def test_optional_parameter_text_box_accepts_automatic(dashboard):
+    widget = dashboard.widgets["numerics.n_rail_modes"]
+    assert isinstance(widget, pn.widgets.TextInput) and widget.value == ""
+    widget.value = "abc"
+    assert "not a whole number" in dashboard.error_alert.object
+    widget.value = str(dashboard.scenario.rail_modes)
+    assert dashboard.scenario.numerics.n_rail_modes == dashboard.scenario.rail_modes
+    assert not dashboard.error_alert.visible
+    widget.value = ""
+    assert dashboard.scenario.numerics.n_rail_modes is None
+
+
+def test_train_type_selector_applies_the_standard_geometry(dashboard):
+    assert dashboard.train_type.value == "Type A"
+    dashboard.train_type.value = "Type B"
+    assert dashboard.scenario.train.car_length == 19.0  # Train.type_b, MODEL.md §1
+    assert dashboard.widgets["train.car_length"].value == 19.0
+    _release(dashboard.widgets["train.car_length"], 20.0)
+    assert dashboard.train_type.value == "Custom"
+
+
+def test_preset_selector_replaces_the_scenario_and_the_widgets(cache):
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    board.refresh = lambda: None  # the paper case is a full-train run; not needed here
+    board.preset_select.value = "paper_soil_lame"
+    assert board.scenario.soil.youngs_modulus == pytest.approx(550.07e6, rel=1e-4)
+    widget = board.widgets["soil.youngs_modulus"]
+    assert widget.value == board.scenario.soil.youngs_modulus
+    assert widget.end >= widget.value  # the slider widens to show an out-of-range preset value
+    assert board.widgets["train.single_bogie"].value is False
+
+
+def test_scenario_save_and_load_round_trip(dashboard):
+    _release(dashboard.widgets["train.speed_kmh"], 95.0)
+    saved = dashboard._scenario_file().getvalue()
+    assert Scenario.from_json(saved).train.speed_kmh == 95.0
+    _release(dashboard.widgets["train.speed_kmh"], 100.0)
+    dashboard.load_input.param.update(filename="s.json", value=saved.encode())
+    assert dashboard.scenario.train.speed_kmh == 95.0
+    assert dashboard.widgets["train.speed_kmh"].value == 95.0
+    assert dashboard.results.scenario.train.speed_kmh == 95.0
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"{not json", "Expecting property name"),
+    (json.dumps({"soil": {"youngs_modulus": -1.0}}).encode(), "outside the allowed range"),
+    (json.dumps({"spaceship": {}}).encode(), "unknown section"),
+    (b"[1, 2]", "Could not load bad.json"),
+])
+def test_a_bad_scenario_file_gives_a_clear_message(dashboard, content, message):
+    before = dashboard.scenario.to_json()
+    dashboard.load_input.param.update(filename="bad.json", value=content)
+    assert dashboard.error_alert.visible
+    assert message in dashboard.error_alert.object.replace("\\", "")
+    assert dashboard.scenario.to_json() == before
+
+
+def test_query_arguments_choose_preset_and_overrides(cache):
+    board = Dashboard.from_query({"preset": [b"single_bogie"], "train.speed_kmh": [b"70"],
+                                  "numerics.n_depths": [b"11"]}, cache=cache)
+    assert board.preset_select.value == "single_bogie"
+    assert board.scenario.train.single_bogie and board.scenario.train.speed_kmh == 70.0
+    assert board.widgets["train.speed_kmh"].value == 70.0
+    assert not board.error_alert.visible
+    bad = Dashboard.from_query({"preset": [b"nope"], "soil.youngs_modulus": [b"-3"]},
+                               cache=cache)
+    text = bad.error_alert.object.replace("\\", "")
+    assert "unknown preset 'nope'" in text and "youngs_modulus" in text
+    assert bad.preset_select.value == "paper"
+
+
+# ---- export.py ------------------------------------------------------------------------------
+# A tag that loads from the network; (Bokeh's own script text mentions a MathJax URL that it
+# fetches only for LaTeX labels, which the report has none of.)
+EXTERNAL_TAG = re.compile(r"""<(?:script|link|img)\b[^>]*(?:src|href)\s*=\s*["']?(?:https?:)?//""",
+                          re.IGNORECASE)
+
+
+def _markup_texts(report: str) -> list[str]:
+    """The HTML shown by every markup pane of a saved page, from its embedded document JSON."""
+    found = re.search(r'<script type="application/json" id="[^"]+">(.*?)</script>', report, re.S)
+    texts = []
+
+    def walk(node):
+        if isinstance(node, dict):
+            for key, value in node.items():
+                if key == "text" and isinstance(value, str):
+                    texts.append(html.unescape(html.unescape(value)))  # escaped twice
+                else:
+                    walk(value)
+        elif isinstance(node, list):
+            for value in node:
+                walk(value)
+
+    walk(json.loads(found.group(1)))
+    return texts
+
+
+def test_report_is_self_contained_and_complete(results):
+    """No tag loads from the network, no component stylesheet is linked (all are inline)."""
+    text = report_html(results)
+    assert not EXTERNAL_TAG.search(text), EXTERNAL_TAG.search(text)
+    assert '"name":"ImportedStyleSheet"' not in text and '"name":"InlineStyleSheet"' in text
+    assert "cdn.holoviz.org" not in text
+    for title in ("Sleeper (block) displacement", "Invert load", "Invert line-load PSD",
+                  "Interface displacement PSD", "Peak dynamic displacement against depth"):
+        assert title in text, title
+    shown = "".join(_markup_texts(text))
+    for item in plots.summary_items(results):
+        assert f'data-key="{item.key}">{item.text}<' in shown
+    assert html.escape(results.scenario_json) in shown  # the full scenario, as <pre> text
+
+
+def test_report_download_button_serves_the_report(dashboard):
+    data = dashboard._report_file()
+    assert isinstance(data, io.BytesIO)
+    assert data.getvalue().startswith(b"<!DOCTYPE html>")
+
+
+def test_export_command_line_writes_the_report(tmp_path, capsys):
+    out = tmp_path / "report.html"
+    code = export_main(["--preset", "single_bogie", "--set", "train.speed_kmh=100",
+                        "--set", "numerics.n_depths=11", "--out", str(out)])
+    assert code == 0 and out.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
+    assert str(out) in capsys.readouterr().out
+
+
+def test_export_command_line_refuses_bad_input(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        export_main(["--preset", "single_bogie", "--set", "soil.youngs_modulus=-1",
+                     "--out", str(tmp_path / "r.html")])
+    assert stop.value.code == 2
+    assert "youngs_modulus" in capsys.readouterr().err
+    assert not (tmp_path / "r.html").exists()
