@@ -467,8 +467,10 @@ def stable_time_step(scenario: Scenario) -> float:
 
 
 def _n_steps(scenario: Scenario) -> int:
-    """Time steps covering the passage."""
-    return math.ceil(scenario.passage_duration / scenario.numerics.dt - 1e-9)
+    """Time steps covering the passage (a ratio within rounding of a whole number is one)."""
+    ratio = scenario.passage_duration / scenario.numerics.dt
+    nearest = round(ratio)
+    return nearest if abs(ratio - nearest) < 1e-6 * max(1.0, ratio) else math.ceil(ratio)
 
 
 def check_inputs(scenario: Scenario) -> None:
