@@ -1,0 +1,145 @@
+"""Command line: run a scenario and write its results as CSV and JSON.
+
+Example::
+
+    python -m model --preset paper --out results --set train.speed_kmh=60
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from model.params import Scenario
+from model.pipeline import STAGES, Results, run
+
+PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``python -m model``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m model",
+        description="Run the vehicle–track–tunnel–soil model and write its results.")
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--preset", default="paper", choices=Scenario.preset_names(),
+                        help="named scenario from assets/presets.json (default: paper)")
+    source.add_argument("--scenario", type=Path, help="scenario JSON file written by a run")
+    parser.add_argument("--set", dest="overrides", action="append", default=[],
+                        metavar="SECTION.PARAM=VALUE",
+                        help="override one parameter, e.g. train.speed_kmh=60 (repeatable)")
+    parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    return parser
+
+
+def load_scenario(args: argparse.Namespace) -> Scenario:
+    """Scenario from the preset or file, with the ``--set`` overrides applied."""
+    scenario = (Scenario.from_json(args.scenario.read_text(encoding="utf-8"))
+                if args.scenario else Scenario.preset(args.preset))
+    for item in args.overrides:
+        path, sep, value = item.partition("=")
+        if not sep:
+            raise ValueError(f"--set {item!r} must be of the form section.parameter=value")
+        scenario.set_value(path.strip(), value.strip())
+    return scenario
+
+
+class TerminalProgress:
+    """Text progress bar on stderr, shown once a run has lasted ``PROGRESS_AFTER_S``."""
+
+    def __init__(self, stream=sys.stderr, width: int = 30):
+        self.stream, self.width = stream, width
+        self.start = time.perf_counter()
+        self.shown = False
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        if time.perf_counter() - self.start < PROGRESS_AFTER_S:
+            return
+        overall = (STAGES.index(stage) + fraction) / len(STAGES)
+        filled = round(overall * self.width)
+        bar = "#" * filled + "-" * (self.width - filled)
+        self.stream.write(f"\r[{bar}] {overall:4.0%} {stage:<14}")
+        self.stream.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        """End the bar's line."""
+        if self.shown:
+            self.stream.write("\n")
+
+
+def write_results(results: Results, out: Path) -> list[Path]:
+    """Write time histories, spectra and the depth profile (CSV), scenario and summary (JSON)."""
+    out.mkdir(parents=True, exist_ok=True)
+    vt, load, soil = results.vehicle_track, results.load, results.soil
+    tables = {
+        "time_histories.csv": {
+            "t_s": vt.t_s,
+            "block_force_N": vt.block_force_N,
+            "block_disp_m": vt.block_disp_m,
+            "rail_disp_m": vt.rail_disp_m,
+            "winkler_block_disp_m": vt.winkler_block_disp_m,
+            "line_load_N_per_m": load.line_load_N_per_m,
+        },
+        "wheel_forces.csv": {
+            "t_s": vt.t_s,
+            **{f"wheel_{i + 1}_N": force for i, force in enumerate(vt.wheel_force_N)},
+        },
+        "load_psd.csv": {"f_hz": load.f_hz, "psd_N2_per_m2_per_hz": load.psd},
+        "interface_psd.csv": {"f_hz": soil.f_hz, "psd_m2_per_hz": soil.interface_psd},
+        "depth_profile.csv": {"depth_m": soil.depth_m, "peak_disp_m": soil.peak_disp_m},
+        "soil_time_histories.csv": {
+            "t_s": soil.t_s,
+            **{f"disp_{d:g}m_m": row for d, row in zip(soil.depth_m, soil.disp_m, strict=True)},
+        },
+    }
+    written = []
+    for name, columns in tables.items():
+        path = out / name
+        np.savetxt(path, np.column_stack(list(columns.values())), delimiter=",",
+                   header=",".join(columns), comments="", fmt="%.9g")
+        written.append(path)
+    scenario_path = out / "scenario.json"
+    scenario_path.write_text(results.scenario_json + "\n", encoding="utf-8")
+    summary_path = out / "summary.json"
+    summary = {"summary": results.summary(), "warnings": results.warnings,
+               "stage_seconds": results.stage_seconds}
+    summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    return [*written, scenario_path, summary_path]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the process exit code (2 for bad input)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        scenario = load_scenario(args)
+        progress = None if args.quiet else TerminalProgress()
+        try:
+            results = run(scenario, progress=progress, cache=None)
+        finally:
+            if progress is not None:
+                progress.close()
+    except (ValueError, KeyError, OSError) as error:
+        message = error.args[0] if isinstance(error, KeyError) and error.args else error
+        parser.exit(2, f"error: {message}\n")
+    paths = write_results(results, args.out)
+    if not args.quiet:
+        for warning in results.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+        summary = results.summary()
+        print(f"peak invert force {summary['peak_invert_force_N'] / 1e3:.1f} kN, "
+              f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
+              f"at 11 m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
+              f"{len(paths)} files in {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

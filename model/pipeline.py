@@ -1,0 +1,238 @@
+"""The one place the stages are chained: vehicle–track → invert load → soil response.
+
+``run(scenario)`` returns :class:`Results`. Each stage is cached on exactly the parameters it
+depends on, so moving a soil slider reuses the vehicle–track simulation and moving the speed
+slider re-runs everything.
+
+Coupling rule (MODEL.md §6): the 3D train loads the 2D tunnel section through the force into
+the invert under the monitored block, spread over one block spacing and summed over both rails,
+``q(t) = N_RAILS · F_b(t) / L_s`` in N per metre of tunnel.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from model.params import Scenario
+from model.settlement import SoilResponse, soil_response
+from model.spectra import one_sided_psd
+from model.vehicle_track import VehicleTrackResult, simulate
+
+N_RAILS = 2  # both rails load the same tunnel section (MODEL.md §6)
+
+# Numerics parameters read by each stage; together they must cover every Numerics parameter
+# (checked by the tests), so that no setting is silently left out of a cache key.
+VEHICLE_TRACK_NUMERICS = ("dt", "n_rail_modes", "rail_end_margin", "approach_distance")
+LOAD_NUMERICS = ("psd_segment",)
+SOIL_NUMERICS = ("n_harmonics", "soil_max_frequency", "zero_pad_factor", "psd_segment",
+                 "max_depth", "n_depths")
+
+STAGES = ("vehicle_track", "load", "soil")
+Progress = Callable[[str, float], None]
+
+
+@dataclass
+class LoadResult:
+    """2D line load on the tunnel section and its spectrum."""
+
+    t_s: np.ndarray
+    """(nt,) time (s)."""
+    line_load_N_per_m: np.ndarray
+    """(nt,) downward line load on the invert, N per metre of tunnel."""
+    f_hz: np.ndarray
+    """(nf,) frequencies of the PSD (Hz)."""
+    psd: np.ndarray
+    """(nf,) one-sided PSD of the line load, (N/m)²/Hz."""
+
+
+@dataclass
+class Results:
+    """Everything one run produces, with the inputs that made it."""
+
+    scenario_json: str
+    vehicle_track: VehicleTrackResult
+    load: LoadResult
+    soil: SoilResponse
+    warnings: list[str] = field(default_factory=list)
+    stage_seconds: dict[str, float] = field(default_factory=dict)
+    """Wall time of each stage in this run; 0.0 for a stage served from the cache."""
+    cached_stages: tuple[str, ...] = ()
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario that produced these results."""
+        return Scenario.from_json(self.scenario_json)
+
+    def summary(self) -> dict[str, float]:
+        """Key numbers in SI units (N, N/m, m, m/s, Pa)."""
+        vt, soil = self.vehicle_track, self.soil
+        scenario = self.scenario
+        depth, peak = soil.depth_m, soil.peak_disp_m
+        return {
+            "peak_invert_force_N": float(np.max(vt.block_force_N)),
+            "peak_line_load_N_per_m": float(np.max(self.load.line_load_N_per_m)),
+            "peak_block_disp_m": float(np.max(vt.block_disp_m)),
+            "peak_wheel_force_N": float(np.max(vt.wheel_force_N)),
+            "min_wheel_force_N": float(np.min(vt.wheel_force_N)),
+            "peak_disp_invert_m": float(peak[0]),
+            "peak_disp_11m_m": float(np.interp(11.0, depth, peak)),
+            "peak_disp_deepest_m": float(peak[-1]),
+            "deepest_depth_m": float(depth[-1]),
+            "soil_p_wave_speed_m_s": scenario.soil.p_wave_speed,
+            "soil_s_wave_speed_m_s": scenario.soil.s_wave_speed,
+            "soil_lame_lambda_Pa": scenario.soil.lame_lambda,
+            "soil_shear_modulus_Pa": scenario.soil.shear_modulus,
+        }
+
+
+class StageCache:
+    """Small LRU cache per stage, keyed on the JSON of the parameters the stage reads."""
+
+    def __init__(self, size: int = 4):
+        self.size = size
+        self._entries: dict[str, OrderedDict[str, Any]] = {s: OrderedDict() for s in STAGES}
+        self.hits = dict.fromkeys(STAGES, 0)
+        self.misses = dict.fromkeys(STAGES, 0)
+
+    def get(self, stage: str, key: str):
+        """Cached value or None; counts the hit or miss."""
+        entries = self._entries[stage]
+        if key in entries:
+            entries.move_to_end(key)
+            self.hits[stage] += 1
+            return entries[key]
+        self.misses[stage] += 1
+        return None
+
+    def put(self, stage: str, key: str, value) -> None:
+        """Store a value, evicting the least recently used beyond ``size``."""
+        entries = self._entries[stage]
+        entries[key] = value
+        entries.move_to_end(key)
+        while len(entries) > self.size:
+            entries.popitem(last=False)
+
+    def clear(self) -> None:
+        """Forget every entry and reset the counters."""
+        self.__init__(self.size)
+
+
+DEFAULT_CACHE = StageCache()
+
+
+def stage_keys(scenario: Scenario) -> dict[str, str]:
+    """Cache key of each stage: the JSON of everything it depends on, upstream included."""
+    data = scenario.to_dict()
+    numerics = data["numerics"]
+
+    def pick(names):
+        return {name: numerics[name] for name in names}
+
+    vehicle_track = {section: data[section]
+                     for section in ("vehicle", "train", "track", "irregularity")}
+    vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
+    load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
+    soil = {"upstream": load, "tunnel": data["tunnel"], "soil": data["soil"],
+            "numerics": pick(SOIL_NUMERICS)}
+    return {name: json.dumps(value, sort_keys=True)
+            for name, value in zip(STAGES, (vehicle_track, load, soil), strict=True)}
+
+
+def invert_line_load(block_force_N: np.ndarray, block_spacing_m: float) -> np.ndarray:
+    """Line load on the 2D section (N/m) from the force into the invert under one block (N)."""
+    return N_RAILS * block_force_N / block_spacing_m
+
+
+def run(scenario: Scenario, progress: Progress | None = None,
+        cache: StageCache | None = DEFAULT_CACHE) -> Results:
+    """Run every stage that the cache cannot serve.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        All inputs; validated before any computation.
+    progress : callable(stage, fraction), optional
+        Told the stage name (``"vehicle_track"``, ``"load"``, ``"soil"``) and the fraction done
+        of that stage, 0 to 1, so a user interface can show a progress bar.
+    cache : StageCache or None
+        Stage cache; ``None`` computes everything afresh.
+
+    Returns
+    -------
+    Results
+    """
+    from model.vehicle_track import check_inputs
+
+    check_inputs(scenario)
+    report = progress or (lambda stage, fraction: None)
+    keys = stage_keys(scenario)
+    seconds: dict[str, float] = {}
+    cached: list[str] = []
+
+    def stage(name, compute):
+        value = cache.get(name, keys[name]) if cache is not None else None
+        if value is not None:
+            cached.append(name)
+            seconds[name] = 0.0
+            report(name, 1.0)
+            return value
+        report(name, 0.0)
+        start = time.perf_counter()
+        value = compute()
+        seconds[name] = time.perf_counter() - start
+        report(name, 1.0)
+        if cache is not None:
+            cache.put(name, keys[name], value)
+        return value
+
+    vt = stage("vehicle_track",
+               lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f)))
+    load = stage("load", lambda: _load_stage(vt, scenario))
+    soil = stage("soil", lambda: soil_response(load.line_load_N_per_m, _time_step(load.t_s),
+                                               scenario.tunnel, scenario.soil,
+                                               scenario.numerics))
+    warnings = list(vt.warnings) + scenario_warnings(scenario)
+    return Results(scenario_json=scenario.to_json(), vehicle_track=vt, load=load, soil=soil,
+                   warnings=warnings, stage_seconds=seconds, cached_stages=tuple(cached))
+
+
+def _load_stage(vt: VehicleTrackResult, scenario: Scenario) -> LoadResult:
+    """Line load from the monitored block force, and its one-sided PSD."""
+    q = invert_line_load(vt.block_force_N, scenario.track.block_spacing)
+    f_hz, psd = one_sided_psd(q, _time_step(vt.t_s), scenario.numerics.psd_segment)
+    return LoadResult(t_s=vt.t_s, line_load_N_per_m=q, f_hz=f_hz, psd=psd)
+
+
+def _time_step(t_s: np.ndarray) -> float:
+    """Uniform sampling interval of a time vector (s)."""
+    return float(t_s[1] - t_s[0])
+
+
+def scenario_warnings(scenario: Scenario) -> list[str]:
+    """Warnings for inputs outside the range the model is meant for (not errors)."""
+    warnings = []
+    for section in ("vehicle", "train", "track", "irregularity", "tunnel", "soil"):
+        obj = getattr(scenario, section)
+        for name, p in obj.param.objects("existing").items():
+            soft = getattr(p, "softbounds", None)
+            value = getattr(obj, name)
+            if soft is None or value is None or isinstance(value, bool):
+                continue
+            low, high = soft
+            if (low is not None and value < low) or (high is not None and value > high):
+                warnings.append(f"{section}.{name} = {value:g} is outside the usual range "
+                                f"[{low:g}, {high:g}] ({p.label}): results are extrapolated")
+    speed, shear_speed = scenario.train.speed, scenario.soil.s_wave_speed
+    if speed > 0.7 * shear_speed:
+        warnings.append(
+            f"train speed {speed:.1f} m/s is {speed / shear_speed:.0%} of the soil shear-wave "
+            f"speed {shear_speed:.1f} m/s: moving-load effects, which the 2D plane-strain tunnel "
+            "model ignores, become important")
+    return warnings

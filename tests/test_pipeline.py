@@ -1,0 +1,185 @@
+"""Pipeline end to end on a cheap scenario, stage caching, warnings and the command line."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from model import pipeline
+from model.__main__ import main
+from model.params import Numerics, Scenario, ScenarioError
+from model.pipeline import StageCache, run
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def cheap_scenario() -> Scenario:
+    """Single bogie at 100 km/h on a 64.8 m rail (~0.8 s, 8 k steps), 11 output depths."""
+    scenario = Scenario.preset("single_bogie")
+    scenario.train.speed_kmh = 100.0
+    scenario.numerics.n_depths = 11
+    return scenario
+
+
+@pytest.fixture(scope="module")
+def results():
+    return run(cheap_scenario(), cache=None)
+
+
+def test_result_fields_have_the_documented_shapes(results):
+    vt, load, soil = results.vehicle_track, results.load, results.soil
+    nt = vt.t_s.size
+    assert nt > 1000
+    for name in ("block_force_N", "block_disp_m", "rail_disp_m", "winkler_block_disp_m"):
+        assert getattr(vt, name).shape == (nt,), name
+    assert vt.wheel_force_N.shape == (2, nt)
+    assert load.t_s.shape == load.line_load_N_per_m.shape == (nt,)
+    assert load.f_hz.shape == load.psd.shape and load.f_hz[0] == 0.0
+    assert soil.f_hz.shape == soil.interface_psd.shape
+    assert soil.depth_m.shape == soil.peak_disp_m.shape == (11,)
+    assert soil.disp_m.shape == (11, soil.t_s.size)
+    for array in (vt.block_force_N, load.psd, soil.interface_psd, soil.peak_disp_m):
+        assert np.all(np.isfinite(array))
+
+
+def test_line_load_is_the_coupling_rule_of_the_model_sheet(results):
+    """q = 2 F_b / L_s exactly (MODEL.md §6)."""
+    np.testing.assert_allclose(results.load.line_load_N_per_m,
+                               2 * results.vehicle_track.block_force_N / 0.6, rtol=1e-15)
+
+
+def test_units_and_magnitudes_are_physical(results):
+    """Loose sanity ranges in SI (a unit slip would miss them by 10³): kN forces, mm motions."""
+    summary = results.summary()
+    assert 5e3 < summary["peak_invert_force_N"] < 1e5
+    assert 1e-5 < summary["peak_block_disp_m"] < 1e-2
+    assert 1e-5 < summary["peak_disp_invert_m"] < 0.1
+    assert summary["peak_disp_deepest_m"] < summary["peak_disp_invert_m"]
+    assert summary["soil_s_wave_speed_m_s"] == pytest.approx(35.806, abs=1e-3)
+
+
+def test_results_carry_the_scenario_that_made_them(results):
+    assert results.scenario.to_dict() == cheap_scenario().to_dict()
+
+
+def test_cache_serves_exactly_the_stages_a_change_does_not_touch():
+    cache = StageCache()
+    scenario = cheap_scenario()
+    first = run(scenario, cache=cache)
+    assert first.cached_stages == ()
+    again = run(scenario, cache=cache)
+    assert again.cached_stages == ("vehicle_track", "load", "soil")
+    assert again.soil is first.soil
+
+    scenario.soil.youngs_modulus = 12e6
+    soil_change = run(scenario, cache=cache)
+    assert soil_change.cached_stages == ("vehicle_track", "load")
+    assert soil_change.vehicle_track is first.vehicle_track
+    assert not np.allclose(soil_change.soil.peak_disp_m, first.soil.peak_disp_m)
+
+    scenario.tunnel.thickness = 0.35
+    assert run(scenario, cache=cache).cached_stages == ("vehicle_track", "load")
+
+    scenario.numerics.psd_segment = 0.5
+    assert run(scenario, cache=cache).cached_stages == ("vehicle_track",)
+
+    scenario.train.speed_kmh = 90.0
+    assert run(scenario, cache=cache).cached_stages == ()
+    assert cache.misses == {"vehicle_track": 2, "load": 3, "soil": 5}
+    assert cache.hits == {"vehicle_track": 4, "load": 3, "soil": 1}
+
+
+def test_cache_is_bounded():
+    cache = StageCache(size=2)
+    for key in "abc":
+        cache.put("soil", key, key)
+    assert cache.get("soil", "a") is None
+    assert cache.get("soil", "c") == "c"
+
+
+def test_every_numerics_parameter_is_in_some_stage_key():
+    """A setting missing from every key would be silently ignored by the cache."""
+    used = set(pipeline.VEHICLE_TRACK_NUMERICS + pipeline.LOAD_NUMERICS + pipeline.SOIL_NUMERICS)
+    assert used == set(Numerics.param) - {"name"}
+
+
+def test_progress_reports_each_stage_in_order_from_zero_to_one():
+    calls = []
+    run(cheap_scenario(), progress=lambda stage, f: calls.append((stage, f)), cache=None)
+    stages = [stage for stage, _ in calls]
+    assert [s for i, s in enumerate(stages) if i == 0 or stages[i - 1] != s] == list(
+        pipeline.STAGES)
+    for stage in pipeline.STAGES:
+        fractions = [f for s, f in calls if s == stage]
+        assert fractions[0] == 0.0 and fractions[-1] == 1.0
+        assert all(np.diff(fractions) >= 0)
+
+
+def test_inputs_outside_the_usual_range_give_warnings_not_errors():
+    scenario = Scenario.paper()
+    scenario.train.speed_kmh = 170.0
+    scenario.soil.youngs_modulus = 5e5
+    warnings = pipeline.scenario_warnings(scenario)
+    assert any(w.startswith("train.speed_kmh = 170 is outside the usual range") for w in warnings)
+    assert any("shear-wave speed" in w for w in warnings)
+    assert pipeline.scenario_warnings(Scenario.paper()) == []
+
+
+def test_inconsistent_scenario_is_refused_before_any_computation():
+    cache = StageCache()
+    scenario = cheap_scenario()
+    scenario.irregularity.wavelength_min = 80.0
+    with pytest.raises(ScenarioError, match="wavelength_min"):
+        run(scenario, cache=cache)
+    assert sum(cache.misses.values()) == 0
+
+
+# ---- command line ---------------------------------------------------------------------------
+
+CHEAP_SET = ["--preset", "single_bogie", "--set", "train.speed_kmh=100",
+             "--set", "numerics.n_depths=11"]
+
+
+def test_cli_writes_readable_files(tmp_path, capsys):
+    assert main([*CHEAP_SET, "--out", str(tmp_path)]) == 0
+    assert "peak invert force" in capsys.readouterr().out
+    profile = np.loadtxt(tmp_path / "depth_profile.csv", delimiter=",", skiprows=1)
+    assert profile.shape == (11, 2)
+    header = (tmp_path / "time_histories.csv").read_text().splitlines()[0].split(",")
+    assert header[:3] == ["t_s", "block_force_N", "block_disp_m"]
+    wheels = np.loadtxt(tmp_path / "wheel_forces.csv", delimiter=",", skiprows=1)
+    assert wheels.shape[1] == 3
+    scenario = Scenario.from_json((tmp_path / "scenario.json").read_text())
+    assert scenario.train.speed_kmh == 100.0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["summary"]["peak_disp_invert_m"] == pytest.approx(profile[0, 1], rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("train.speed_kmh=-5", "Train.speed_kmh = -5.0 is outside the allowed range (0, 400]"),
+        ("train.speed_kmh=fast", "train.speed_kmh = 'fast' is not a number"),
+        ("train.speed=5", "unknown parameter 'speed' in section 'train'"),
+        ("speed_kmh", "must be of the form section.parameter=value"),
+    ],
+)
+def test_cli_refuses_a_bad_set_with_a_clear_message(tmp_path, capsys, override, message):
+    with pytest.raises(SystemExit) as info:
+        main(["--set", override, "--out", str(tmp_path)])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert "Traceback" not in err
+
+
+def test_cli_runs_as_a_module(tmp_path):
+    """The real entry point, in a fresh interpreter (Numba's on-disk cache keeps it quick)."""
+    done = subprocess.run([sys.executable, "-m", "model", *CHEAP_SET, "--quiet",
+                           "--out", str(tmp_path)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "summary.json").exists()
