@@ -216,23 +216,17 @@ def _time_step(t_s: np.ndarray) -> float:
 
 
 def scenario_warnings(scenario: Scenario) -> list[str]:
-    """Warnings for inputs outside the range the model is meant for (not errors)."""
+    """Warnings for inputs where the model's simplifications start to matter (not errors)."""
     warnings = []
-    for section in ("vehicle", "train", "track", "irregularity", "tunnel", "soil"):
-        obj = getattr(scenario, section)
-        for name, p in obj.param.objects("existing").items():
-            soft = getattr(p, "softbounds", None)
-            value = getattr(obj, name)
-            if soft is None or value is None or isinstance(value, bool):
-                continue
-            low, high = soft
-            if (low is not None and value < low) or (high is not None and value > high):
-                warnings.append(f"{section}.{name} = {value:g} is outside the usual range "
-                                f"[{low:g}, {high:g}] ({p.label}): results are extrapolated")
     speed, shear_speed = scenario.train.speed, scenario.soil.s_wave_speed
     if speed > 0.7 * shear_speed:
         warnings.append(
             f"train speed {speed:.1f} m/s is {speed / shear_speed:.0%} of the soil shear-wave "
             f"speed {shear_speed:.1f} m/s: moving-load effects, which the 2D plane-strain tunnel "
             "model ignores, become important")
+    record, segment = scenario.passage_duration, scenario.numerics.psd_segment
+    if record < segment:
+        warnings.append(
+            f"the passage lasts {record:.2f} s, less than numerics.psd_segment = {segment:g} s: "
+            f"the PSDs use the whole record, a frequency resolution of {1 / record:.2f} Hz")
     return warnings
