@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from model import _vt_kernels as kernels
+from model import irregularity
 from model.params import GRAVITY, Scenario
 
 ZHAI_PHI = 0.5
@@ -286,17 +287,15 @@ def _build_model(scenario: Scenario, duration: float) -> _Model:
     monitored_x = monitored * track.length / track.n_spacings
     wheel_x0 = (monitored_x - scenario.numerics.approach_distance
                 - np.asarray(scenario.train.axle_offsets, dtype=float))
-    irr = scenario.irregularity
-    eta_step = min(PROFILE_GRID_STEP, irr.wavelength_min / 100.0)
+    eta_step = min(PROFILE_GRID_STEP, scenario.irregularity.wavelength_min / 100.0)
     start = wheel_x0.min() - eta_step
     n_grid = math.ceil((wheel_x0.max() + speed * duration - start) / eta_step) + 2
     grid = start + eta_step * np.arange(n_grid)
-    from model.irregularity import profile_for  # sibling stage; imported where it is used
-
     return _Model(
         track=track, vehicle=_vehicle_system(scenario), wheel_x0=wheel_x0, speed=speed,
         hertz_constant=scenario.track.hertz_constant, prescribed_load=np.array([-1.0]),
-        eta_grid=np.ascontiguousarray(profile_for(irr, grid), dtype=float),
+        eta_grid=np.ascontiguousarray(irregularity.profile_for(scenario.irregularity, grid),
+                                      dtype=float),
         eta_start=float(start), eta_step=eta_step, monitored_block=monitored)
 
 
@@ -569,6 +568,7 @@ def simulate(scenario: Scenario,
         From :func:`check_inputs`.
     """
     check_inputs(scenario)
+    stable_dt = stable_time_step(scenario)
     dt = scenario.numerics.dt
     n_steps = _n_steps(scenario)
     model = _build_model(scenario, n_steps * dt)
@@ -583,7 +583,7 @@ def simulate(scenario: Scenario,
             f"the integration diverged at t = {nt * dt:.4g} s (a wheel–rail compression passed "
             f"{DIVERGENCE_COMPRESSION * 1e3:g} mm or became non-finite) and was stopped; the "
             f"record ends there. The time step {dt:g} s is too large for this scenario: use a "
-            f"smaller numerics.dt (estimated limit {stable_time_step(scenario):.3g} s).")
+            f"smaller numerics.dt (estimated limit {stable_dt:.3g} s).")
     events = _contact_events(run["events"])
     if run["n_events"]:
         warnings.append(_contact_loss_message(events, run["n_events"]))
@@ -596,7 +596,7 @@ def simulate(scenario: Scenario,
         monitored_block_x_m=model.monitored_x, contact_loss=events,
         unstable=run["diverged"] is not None, warnings=warnings,
         static_wheel_load_N=float(_static_loads(model)[0]), dt_s=dt,
-        stable_dt_s=stable_time_step(scenario), n_rail_modes=model.track.omega2.size,
+        stable_dt_s=stable_dt, n_rail_modes=model.track.omega2.size,
         rail_length_m=model.track.length, speed_m_s=model.speed)
 
 
