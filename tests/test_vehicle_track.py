@@ -125,6 +125,50 @@ def test_static_track_solution_equals_dense_solve(modes_per_spacing):
     np.testing.assert_allclose(blocks, blocks_dense, atol=1e-9 * blocks_dense.max())
 
 
+@pytest.mark.parametrize("modes_per_spacing", [1.0, 2.05])
+def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
+    """One evaluation of the kernel's accelerations for a random track state and prescribed
+    wheel loads, against MODEL.md §2 written with dense matrices in physical block coordinates
+    (Φ_ki = Y_k(x_i) by NumPy sines, Z_s = D s with D the orthonormal DST-I). Both exact:
+    tolerance 1e-10 of the largest term."""
+    scenario = smooth_single_bogie()
+    n = round(scenario.rail_length / scenario.track.block_spacing)
+    scenario.numerics.n_rail_modes = round(modes_per_spacing * n)
+    loads = np.array([61e3, 55e3])
+    model = dataclasses.replace(vt._build_model(scenario, 1.0), prescribed_load=loads)
+    tr = model.track
+    rng = np.random.default_rng(7)
+    state = vt._initial_state(model)
+    for name in ("q", "qd", "s", "sd"):
+        state[name][:] = rng.standard_normal(state[name].size) * 1e-4
+    vt._integrate(model, state, 0, 1e-4)  # zero steps: accelerations at t = 0 only
+
+    k = np.arange(1, tr.omega2.size + 1)[:, None]
+    x_blocks = scenario.track.block_spacing * np.arange(1, n)
+    phi = math.sqrt(2 / (scenario.track.rail_mass * tr.length)) * np.sin(
+        k * np.pi * x_blocks[None, :] / tr.length)
+    dst = math.sqrt(2 / n) * np.sin(np.outer(np.arange(1, n), np.arange(1, n)) * np.pi / n)
+    y_wheels = math.sqrt(2 / (scenario.track.rail_mass * tr.length)) * np.sin(
+        k * np.pi * model.wheel_x0[None, :] / tr.length)
+    z_block, v_block = dst @ state["s"], dst @ state["sd"]
+    fastener = (tr.fastener_k * (phi.T @ state["q"] - z_block)
+                + tr.fastener_c * (phi.T @ state["qd"] - v_block))
+    rail_acc = -tr.omega2 * state["q"] - phi @ fastener + y_wheels @ loads
+    block_acc = (fastener - tr.pad_k * z_block - tr.pad_c * v_block) / tr.block_mass
+    np.testing.assert_allclose(state["qdd"], rail_acc, atol=1e-10 * np.abs(rail_acc).max())
+    np.testing.assert_allclose(dst @ state["sdd"], block_acc,
+                               atol=1e-10 * np.abs(block_acc).max())
+
+
+def test_hertz_law():
+    """p = (δ/G)^{3/2} for δ > 0 and 0 otherwise (the wheel has left the rail)."""
+    g = Scenario().track.hertz_constant
+    load = 61140.825
+    assert vt.kernels.hertz_force(g * load ** (2 / 3), g) == pytest.approx(load, rel=1e-13)
+    assert vt.kernels.hertz_force(0.0, g) == 0.0
+    assert vt.kernels.hertz_force(-1e-6, g) == 0.0
+
+
 def test_static_start_is_equilibrium_with_hertz_compression():
     """At t = 0 each wheel sits G p^{2/3} (≈ 81 µm, MODEL.md §3) into the rail and the vehicle
     is at rest: its accelerations are below 1e-6 g (the kernel's Chebyshev mode shapes agree
