@@ -201,6 +201,21 @@ def _stress_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
 
 
 @numba.njit(cache=True)
+def _stress_difference_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
+    """S_rr − S_rθ of the P solution and of the P + SV sum, formed analytically.
+
+    For n = 1 this is the soil's net force on a rigidly translating ring, which is small
+    against each stress when the lining is stiff; forming it by subtraction would lose it.
+    """
+    inv_r = 1.0 / r
+    inertia_p = (lame + 2.0 * shear) * alpha * alpha  # = −ρω²
+    diff_p = inertia_p + 2.0 * shear * (1.0 - n) * delta_p * inv_r
+    diff_sum = (inertia_p + shear * beta * beta
+                + 2.0 * shear * (1.0 - n) * (delta_p + delta_s) * inv_r)
+    return diff_p, diff_sum
+
+
+@numba.njit(cache=True)
 def _bessel_ratios(z, n_max, out):
     """out[m] = K_{m+1}(z)/K_m(z), m = 0..n_max (forward recurrence); returns K₀(z) eᶻ."""
     k0, k1 = bessel_k01_scaled(z)
@@ -250,9 +265,14 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
         amp_sum = np.empty(n_max + 1, np.complex128)  # amplitude Y of the P + SV sum
         inertia = -omega[i] ** 2 * ring_mass
         for n in range(n_max + 1):
-            z_rr = inertia + ring_extensional / a**2 + ring_bending * (n * n - 1.0) ** 2 / a**4
+            # Ring impedance rows: radial (z_rr, z_rt), tangential (z_rt, z_tt). The system is
+            # solved with rows (radial − tangential, tangential); their difference (d_r, d_t) is
+            # formed analytically because the K/a² terms cancel for the rigid translation n = 1.
+            bending = ring_bending * (n * n - 1.0) ** 2 / a**4
             z_rt = ring_extensional * n / a**2
             z_tt = inertia + ring_extensional * n * n / a**2
+            d_r = inertia + ring_extensional * (1.0 - n) / a**2 + bending
+            d_t = -inertia + ring_extensional * n * (1.0 - n) / a**2
             if n == 0:
                 delta_p = alpha * ratio_p_a[0]
                 delta_s = beta * ratio_s_a[0]
@@ -260,18 +280,21 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
                 delta_p = alpha * _reciprocal(ratio_p_a[n - 1])
                 delta_s = beta * _reciprocal(ratio_s_a[n - 1])
             u_p, v_p, u_sum, v_sum = _displacement_terms(n, a, delta_p, delta_s)
-            srr_p, srr_sum, _, _, srt_p, srt_sum = _stress_terms(n, a, alpha, beta, delta_p,
-                                                                 delta_s, shear, lame)
-            m00 = z_rr * u_p + z_rt * v_p - srr_p
             if n == 0:  # sin 0θ = 0: no SV potential, radial equation only
-                amp_p[n] = 1.0 / m00
+                srr_p = _stress_terms(n, a, alpha, beta, delta_p, delta_s, shear, lame)[0]
+                amp_p[n] = 1.0 / ((inertia + ring_extensional / a**2 + bending) * u_p - srr_p)
                 amp_sum[n] = 0.0
                 continue
-            m01 = z_rr * u_sum + z_rt * v_sum - srr_sum
+            _, _, _, _, srt_p, srt_sum = _stress_terms(n, a, alpha, beta, delta_p, delta_s,
+                                                       shear, lame)
+            diff_p, diff_sum = _stress_difference_terms(n, a, alpha, beta, delta_p, delta_s,
+                                                        shear, lame)
+            m00 = d_r * u_p + d_t * v_p - diff_p
+            m01 = d_r * u_sum + d_t * v_sum - diff_sum
             m10 = z_rt * u_p + z_tt * v_p - srt_p
             m11 = z_rt * u_sum + z_tt * v_sum - srt_sum
             det = m00 * m11 - m01 * m10
-            amp_p[n] = m11 / det
+            amp_p[n] = m11 / det  # right-hand side (1, 0): unit radial traction
             amp_sum[n] = -m10 / det
         inv_ratio_p_a = 1.0 / ratio_p_a  # so the inner loop multiplies instead of dividing
         inv_ratio_s_a = 1.0 / ratio_s_a
@@ -281,9 +304,14 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
             zs = beta * r
             k0p, k1p = bessel_k01_scaled(zp)
             k0s, k1s = bessel_k01_scaled(zs)
-            # e_P = K_n(αr)/K_n(αa), advanced in n with the ratio recurrence.
-            e_p = k0p / k0p_a * cmath.exp(-alpha * (r - a))
-            e_s = k0s / k0s_a * cmath.exp(-beta * (r - a))
+            # e_P = K_n(αr)/K_n(αa), advanced in n with the ratio recurrence. At r = a it is 1
+            # exactly (a complex x/x can be off by an ulp, which Y (e_P − e_S) would amplify).
+            if r == a:
+                e_p = 1.0 + 0j
+                e_s = 1.0 + 0j
+            else:
+                e_p = k0p / k0p_a * cmath.exp(-alpha * (r - a))
+                e_s = k0s / k0s_a * cmath.exp(-beta * (r - a))
             ratio_p = k1p / k0p  # R_n(αr) = K_{n+1}/K_n, advanced in n below
             ratio_s = k1s / k0s
             delta_p = alpha * ratio_p  # δ_P = α R_0 for n = 0, α/R_{n−1} for n ≥ 1
@@ -306,8 +334,9 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
                         s_rr[i, j] += cw * (c_p * srr_p + c_sum * srr_sum)
                         s_tt[i, j] += cw * (c_p * stt_p + c_sum * stt_sum)
                         s_rt[i, j] += sw * (c_p * srt_p + c_sum * srt_sum)
-                e_p *= ratio_p * inv_ratio_p_a[n]
-                e_s *= ratio_s * inv_ratio_s_a[n]
+                if r != a:  # at r = a, e_P = e_S = 1 exactly, and Y (e_P − e_S) must vanish
+                    e_p *= ratio_p * inv_ratio_p_a[n]
+                    e_s *= ratio_s * inv_ratio_s_a[n]
                 recip_p = _reciprocal(ratio_p)
                 recip_s = _reciprocal(ratio_s)
                 delta_p = alpha * recip_p
