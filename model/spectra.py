@@ -12,8 +12,11 @@ import scipy.fft
 import scipy.signal
 
 
-def _check_record(x, dt_s) -> np.ndarray:
-    """1-D finite float array of at least two samples; dt_s finite and > 0."""
+def checked_record(x, dt_s) -> np.ndarray:
+    """``x`` as a 1-D finite float array of ≥ 2 samples, after checking that dt_s (s) is > 0.
+
+    Raises ValueError naming the offending input otherwise.
+    """
     record = np.asarray(x, dtype=float)
     if record.ndim != 1 or record.size < 2:
         raise ValueError(f"x must be a 1-D record of at least 2 samples, got shape "
@@ -52,7 +55,7 @@ def one_sided_psd(x, dt_s: float, segment_s: float) -> tuple[np.ndarray, np.ndar
     psd : ndarray
         One-sided PSD in unit²/Hz.
     """
-    record = _check_record(x, dt_s)
+    record = checked_record(x, dt_s)
     if not (np.isfinite(segment_s) and segment_s > 0.0):
         raise ValueError(f"segment_s = {segment_s!r} is outside the allowed range (0, inf) s")
     n_segment = int(min(record.size, max(2, round(segment_s / dt_s))))
@@ -83,7 +86,7 @@ def fourier_transform(x, dt_s: float, n_fft: int | None = None):
     spectrum : ndarray
         Complex X(f) in unit·s (= unit/Hz).
     """
-    record = _check_record(x, dt_s)
+    record = checked_record(x, dt_s)
     n = record.size if n_fft is None else int(n_fft)
     if n < record.size:
         raise ValueError(f"n_fft = {n_fft!r} is shorter than the record ({record.size} samples)")

@@ -1,0 +1,174 @@
+"""Displacement time histories below the tunnel and their peaks against depth (MODEL.md §8).
+
+The line load q(t) on the invert is Fourier transformed, multiplied by the invert receptance
+H(f, d) of ``model.tunnel_soil`` and transformed back, at every output depth d.
+
+Record handling:
+
+- **Zero padding.** The record of duration T is padded with zeros to ``zero_pad_factor`` × T,
+  so the periodic inverse FFT approximates the transient response; the padded part also holds
+  the response after the load has ended.
+- **Anti-aliased decimation, in the frequency domain.** The padded record is transformed at its
+  own sampling rate and only the bins with f ≤ ``soil_max_frequency`` are kept (an ideal
+  low-pass filter, no ripple or filter transient); the inverse transform is taken on a coarser
+  time grid, Δt_out = k Δt with k the largest integer giving at least 4 samples per period of
+  ``soil_max_frequency`` (peaks of content at f_max are then sampled to within 1 − cos(π/4)).
+- **Zero frequency.** In 2D the static response to a line load is infinite: the n = 1 harmonic
+  grows like B ln(1/ω). The DC bin stands for the band [−Δf/2, Δf/2], so it is given the band
+  average of H. Near f = 0, H(f) = A + B ln f + O((ωa/c)² ln ω), whose exact average over
+  [0, h] is A + B(ln h − 1) = H(h/e); the DC bin therefore uses Re H(Δf/(2e)) (real because
+  H(−f) = conj H(f)). Its contribution, ~ q̄ (ln T_pad)/T_pad, vanishes as the padding grows,
+  and the tests show the peak displacement converging.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft
+
+from model.spectra import checked_record, fourier_transform, one_sided_psd
+from model.tunnel_soil import invert_receptance
+
+# Output samples per period of the highest retained frequency (see the module docstring).
+SAMPLES_PER_MAX_FREQUENCY_PERIOD = 4
+# Tail kept after the load record, in units of the S-wave transit time to the deepest output
+# depth: the response at depth d lags the load by about d/c₂, twice that covers its peak.
+TAIL_TRANSIT_TIMES = 2.0
+
+
+@dataclass(frozen=True)
+class SoilResponse:
+    """Soil stage result: displacement below the invert per the line-load history."""
+
+    f_hz: np.ndarray
+    """(nf,) frequencies of the interface PSD, 0 … soil_max_frequency (Hz)."""
+    interface_psd: np.ndarray
+    """(nf,) one-sided PSD of the interface displacement over the load record, m²/Hz."""
+    depth_m: np.ndarray
+    """(nd,) depths below the ring–soil interface (m); row 0 is the interface."""
+    peak_disp_m: np.ndarray
+    """(nd,) peak downward dynamic displacement at each depth during the passage (m)."""
+    t_s: np.ndarray
+    """(nt,) time of the histories (s), load record plus tail."""
+    disp_m: np.ndarray
+    """(nd, nt) downward displacement at each depth (m)."""
+    interface_spectrum_f_hz: np.ndarray
+    """(nk,) frequencies of the amplitude spectra, 0 … soil_max_frequency, step 1/T_pad (Hz)."""
+    interface_amplitude_m_per_hz: np.ndarray
+    """(nk,) Fourier amplitude |U(f)| of the interface displacement (m/Hz)."""
+    line_load_amplitude_N_per_m_per_hz: np.ndarray
+    """(nk,) Fourier amplitude |Q(f)| of the line load ((N/m)/Hz)."""
+
+
+def decimation_factor(dt_s: float, max_frequency_hz: float) -> int:
+    """Largest k ≥ 1 with k Δt ≤ 1/(4 f_max): the output step of the soil stage is k Δt.
+
+    Parameters
+    ----------
+    dt_s : float
+        Sampling interval of the load (s), > 0.
+    max_frequency_hz : float
+        Highest frequency kept, f_max (Hz), > 0.
+
+    Returns
+    -------
+    int
+        The decimation factor k.
+    """
+    return max(1, math.floor(1.0 / (SAMPLES_PER_MAX_FREQUENCY_PERIOD * max_frequency_hz * dt_s)
+                             + 1e-9))
+
+
+def dc_band_receptance(band_halfwidth_hz: float, depth_m, tunnel, soil,
+                       n_harmonics: int) -> np.ndarray:
+    """Receptance averaged over the zero-frequency bin's band [−h, h] (m per N/m).
+
+    Re H(h/e): exact for H = A + B ln f, the 2D low-frequency form (module docstring).
+
+    Parameters
+    ----------
+    band_halfwidth_hz : float
+        h = Δf/2 (Hz), > 0.
+    depth_m : array_like
+        Depths below the ring–soil interface (m), ≥ 0.
+    tunnel, soil : model.params.Tunnel, model.params.Soil
+        Lining and soil.
+    n_harmonics : int
+        Highest circumferential harmonic.
+
+    Returns
+    -------
+    ndarray
+        Real (n_depth,) band-averaged receptance.
+    """
+    return invert_receptance(band_halfwidth_hz / math.e, depth_m, tunnel, soil,
+                             n_harmonics)[0].real
+
+
+def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> SoilResponse:
+    """Displacement histories and peaks below the invert for a line-load history.
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Downward line load on the invert q(t) (N/m), sampled from t = 0 at ``dt_s``.
+    dt_s : float
+        Sampling interval (s), > 0.
+    tunnel : model.params.Tunnel
+        Lining.
+    soil : model.params.Soil
+        Soil.
+    numerics : model.params.Numerics
+        Uses n_harmonics, soil_max_frequency, zero_pad_factor, psd_segment, max_depth,
+        n_depths.
+
+    Returns
+    -------
+    SoilResponse
+    """
+    load = checked_record(line_load_N_per_m, dt_s)
+    n_record = load.size
+    record_s = n_record * dt_s
+    f_max = numerics.soil_max_frequency
+    step = decimation_factor(dt_s, f_max)
+    dt_out = step * dt_s
+    n_out_pad = scipy.fft.next_fast_len(math.ceil(numerics.zero_pad_factor * n_record / step),
+                                        real=True)
+    n_pad = step * n_out_pad
+    f_hz, load_spectrum = fourier_transform(load, dt_s, n_pad)
+    n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
+    if n_keep < 2:
+        raise ValueError(f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
+                         f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding")
+    f_hz, load_spectrum = f_hz[:n_keep], load_spectrum[:n_keep]
+
+    depth = np.linspace(0.0, numerics.max_depth, numerics.n_depths)
+    receptance = np.empty((n_keep, depth.size), dtype=complex)
+    receptance[0] = dc_band_receptance(0.5 * f_hz[1], depth, tunnel, soil,
+                                       numerics.n_harmonics)
+    receptance[1:] = invert_receptance(f_hz[1:], depth, tunnel, soil, numerics.n_harmonics)
+
+    disp_spectrum = np.zeros((depth.size, n_out_pad // 2 + 1), dtype=complex)
+    disp_spectrum[:, :n_keep] = (receptance * load_spectrum[:, None]).T
+    # Samples of u(t) = ∫ U(f) e^{i2πft} df on the output grid: Δf · n_out_pad = 1/dt_out.
+    tail_s = TAIL_TRANSIT_TIMES * numerics.max_depth / soil.s_wave_speed
+    n_out = min(n_out_pad, math.ceil((record_s + tail_s) / dt_out))
+    disp = scipy.fft.irfft(disp_spectrum, n_out_pad, axis=1)[:, :n_out] / dt_out
+
+    n_record_out = max(2, min(n_out, round(record_s / dt_out)))
+    psd_f_hz, psd = one_sided_psd(disp[0, :n_record_out], dt_out, numerics.psd_segment)
+    in_band = psd_f_hz <= f_max
+    return SoilResponse(
+        f_hz=psd_f_hz[in_band],
+        interface_psd=psd[in_band],
+        depth_m=depth,
+        peak_disp_m=disp.max(axis=1),
+        t_s=np.arange(n_out) * dt_out,
+        disp_m=disp,
+        interface_spectrum_f_hz=f_hz,
+        interface_amplitude_m_per_hz=np.abs(disp_spectrum[0, :n_keep]),
+        line_load_amplitude_N_per_m_per_hz=np.abs(load_spectrum),
+    )
