@@ -205,7 +205,8 @@ def advance(step_start, step_stop, dt, phi, psi,
     int
         ``RUNNING`` (−1) if all steps were taken, else the index of the first output at which
         the response diverged (non-finite, or a wheel–rail compression beyond
-        ``divergence_limit`` m); outputs from that index on are not valid.
+        ``divergence_limit`` m; a gap of any size is a wheel in flight, not divergence);
+        outputs from that index on are not valid.
     """
     n_modes = q.size
     n_block_modes = s.size
@@ -244,7 +245,7 @@ def advance(step_start, step_stop, dt, phi, psi,
 
         for j in range(n_wheels):
             delta = compression[j]
-            if not abs(delta) <= divergence_limit:  # also catches NaN
+            if not delta <= divergence_limit:  # also catches NaN; a gap is a wheel in flight
                 return out
             touching = wheel_force[j] > 0.0
             if in_contact[j] and not touching:

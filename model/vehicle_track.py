@@ -26,8 +26,9 @@ ZHAI_PSI = 0.5
 # dynamic load rarely exceeds it), and this factor on the resulting limit.
 HERTZ_OVERLOAD = 2.0
 STABILITY_SAFETY = 0.9
-# A wheel–rail compression or gap beyond this (m) means the integration has diverged: the
-# static compression is ~0.08 mm, and 10 mm would be 80 MN or a wheel jumping clear of the rail.
+# A wheel–rail compression beyond this (m) means the integration has diverged: the static
+# compression is ~0.08 mm and 10 mm would take 80 MN. (A gap of any size is a wheel in flight,
+# which the model follows and reports as loss of contact.)
 DIVERGENCE_COMPRESSION = 0.01
 # Irregularity sampled for linear interpolation at this spacing (m), or λ_min/100 if finer
 # (interpolation error < 5e-4 of the amplitude at λ_min).
@@ -279,14 +280,17 @@ class _Model:
         return np.interp(x, grid_x, self.eta_grid)
 
 
+def _wheel_start_positions(scenario: Scenario) -> np.ndarray:
+    """Wheel positions at t = 0 (m): the leading axle ``approach_distance`` before mid-rail."""
+    return (0.5 * scenario.rail_length - scenario.numerics.approach_distance
+            - np.asarray(scenario.train.axle_offsets, dtype=float))
+
+
 def _build_model(scenario: Scenario, duration: float) -> _Model:
     """Kernel data for ``scenario``, with the irregularity sampled where the wheels run."""
     track = _track_system(scenario)
     speed = scenario.train.speed
-    monitored = track.n_spacings // 2
-    monitored_x = monitored * track.length / track.n_spacings
-    wheel_x0 = (monitored_x - scenario.numerics.approach_distance
-                - np.asarray(scenario.train.axle_offsets, dtype=float))
+    wheel_x0 = _wheel_start_positions(scenario)
     eta_step = min(PROFILE_GRID_STEP, scenario.irregularity.wavelength_min / 100.0)
     start = wheel_x0.min() - eta_step
     n_grid = math.ceil((wheel_x0.max() + speed * duration - start) / eta_step) + 2
@@ -296,7 +300,7 @@ def _build_model(scenario: Scenario, duration: float) -> _Model:
         hertz_constant=scenario.track.hertz_constant, prescribed_load=np.array([-1.0]),
         eta_grid=np.ascontiguousarray(irregularity.profile_for(scenario.irregularity, grid),
                                       dtype=float),
-        eta_start=float(start), eta_step=eta_step, monitored_block=monitored)
+        eta_start=float(start), eta_step=eta_step, monitored_block=track.n_spacings // 2)
 
 
 def _static_loads(model: _Model) -> np.ndarray:
@@ -411,27 +415,37 @@ def _integrate(model: _Model, state: dict[str, np.ndarray], n_steps: int, dt: fl
 def zhai_damped_limit(omega: float, gamma: float) -> float:
     """Largest stable Δt of Zhai's method (φ = ψ = ½) for ẍ + γẋ + ω²x = 0 (s).
 
-    Δt_max = 2(√(ω² + γ²) − γ)/ω², i.e. ωΔt < 2(√(1 + 4ζ²) − 2ζ) with γ = 2ζω: 2/ω without
-    damping (verified against the amplification matrix in the tests).
+    Δt_max = 2/(γ + √(ω² + γ²)), i.e. ωΔt < 2(√(1 + 4ζ²) − 2ζ) with γ = 2ζω: 2/ω undamped,
+    1/γ without stiffness. Stable for every Δt below it, unstable above (verified against the
+    amplification matrix in the tests). Decreasing in both ω and γ.
     """
-    return 2.0 * (math.sqrt(omega * omega + gamma * gamma) - gamma) / (omega * omega)
+    return 2.0 / (gamma + math.sqrt(omega * omega + gamma * gamma))
+
+
+def _largest_eigenvalue_2x2(a: float, b: float, d: float) -> float:
+    """Largest eigenvalue of the symmetric matrix [[a, b], [b, d]]."""
+    return 0.5 * (a + d) + math.hypot(0.5 * (a - d), b)
 
 
 def stable_time_step(scenario: Scenario) -> float:
-    """Explicit stability limit estimate for the scenario, with a safety factor (s).
+    """Explicit stability limit of the linearised model, with a safety factor (s).
 
-    The limit is the smallest :func:`zhai_damped_limit` over three subsystems, each with its
-    highest frequency bounded from above:
+    Every eigenvalue z of Zhai's scheme for M ẍ + C ẋ + K x = 0 (symmetric, M > 0) solves the
+    scalar scheme for ẍ + γẋ + ω²x = 0 with the Rayleigh quotients γ = x*Cx/x*Mx ≤ γ_max and
+    ω² = x*Kx/x*Mx ≤ ω²_max of its eigenvector. :func:`zhai_damped_limit` decreases in both, so
+    Δt ≤ zhai_damped_limit(ω_max, γ_max) is stable. Upper bounds (Weyl's inequality, all in
+    mass-normalised coordinates):
 
-    - rail: highest mode (EI/m_r)(N_m π/L)⁴ plus the fastener stiffness seen by a mode,
-      n_f K_r/(m_r L_s) (n_f rail modes share one block mode when N_m ≥ N), plus the
-      linearised Hertz spring of one wheel, k_H Σ_k Y_k² ≈ k_H N_m/(m_r L); damping
-      n_f C_r/(m_r L_s);
-    - blocks: (K_r + K_s)/M_s, damping (C_r + C_s)/M_s;
-    - vehicle: Gershgorin bound of M⁻¹K with k_H on the wheelsets, damping likewise.
+    - ω²_max ≤ max(track, vehicle) + Hertz. Track: highest rail mode (EI/m_r)(N_m π/L)⁴ plus
+      the largest eigenvalue of the fastener/pad coupling of one block mode with the n_f rail
+      modes folded onto it, [[n_f K_r b², −√n_f K_r b/√M_s], [·, (K_r + K_s)/M_s]],
+      b = 1/√(m_r L_s). Vehicle: exact, per car. Hertz: k_H times the largest eigenvalue of the
+      Gram matrix of the wheels' contact vectors (Σ_k Y_k(x_i) Y_k(x_j) + δ_ij/m_w).
+    - γ_max ≤ max(track coupling with C_r, C_s; vehicle), likewise.
 
-    k_H = (3/2) p^{1/3}/G is taken at ``HERTZ_OVERLOAD`` (2) times the static wheel load, and the
-    result is multiplied by ``STABILITY_SAFETY`` (0.9).
+    k_H = (3/2) p^{1/3}/G is linearised at ``HERTZ_OVERLOAD`` (2) times the static wheel load;
+    the result is multiplied by ``STABILITY_SAFETY`` (0.9) for harder contact and the motion of
+    the wheels.
 
     Parameters
     ----------
@@ -444,25 +458,28 @@ def stable_time_step(scenario: Scenario) -> float:
     """
     track = scenario.track
     system = _track_system(scenario)
-    n_modes = system.omega2.size
+    vehicle = _vehicle_system(scenario)
+    shared = np.bincount(system.fold_index[system.fold_index >= 0]).max(initial=1)
+    gain = math.sqrt(shared) * system.block_gain
+
+    def track_coupling(fastener, pad):
+        return _largest_eigenvalue_2x2(fastener * gain**2,
+                                       -fastener * gain / math.sqrt(track.block_mass),
+                                       (fastener + pad) / track.block_mass)
+
+    scale = np.sqrt(vehicle.inv_mass[0])
+    vehicle_k = np.linalg.eigvalsh(scale[:, None] * vehicle.stiffness[0] * scale).max()
+    vehicle_c = np.linalg.eigvalsh(scale[:, None] * vehicle.damping[0] * scale).max()
     load = HERTZ_OVERLOAD * scenario.vehicle.static_wheel_load
     k_hertz = 1.5 * load ** (1.0 / 3.0) / track.hertz_constant
-    shared = np.bincount(system.fold_index[system.fold_index >= 0]).max(initial=1)
-    per_block = 1.0 / (track.rail_mass * track.block_spacing)
-    rail = zhai_damped_limit(
-        math.sqrt(system.omega2[-1] + shared * track.fastener_stiffness * per_block
-                  + k_hertz * n_modes / (track.rail_mass * system.length)),
-        shared * track.fastener_damping * per_block)
-    blocks = zhai_damped_limit(
-        math.sqrt((track.fastener_stiffness + track.pad_stiffness) / track.block_mass),
-        (track.fastener_damping + track.pad_damping) / track.block_mass)
-    vehicle = _vehicle_system(scenario)
-    stiffness = np.abs(vehicle.stiffness[0])
-    stiffness[vehicle.wheel_dof[0], vehicle.wheel_dof[0]] += k_hertz
-    inv_mass = vehicle.inv_mass[0]
-    wheels = zhai_damped_limit(math.sqrt(np.max(inv_mass * stiffness.sum(axis=1))),
-                               np.max(inv_mass * np.abs(vehicle.damping[0]).sum(axis=1)))
-    return STABILITY_SAFETY * min(rail, blocks, wheels)
+    shapes = system.mode_shapes(_wheel_start_positions(scenario))
+    wheel_inv_mass = vehicle.inv_mass[:, vehicle.wheel_dof[0]].ravel()
+    gram = shapes.T @ shapes + np.diag(wheel_inv_mass)
+    omega2 = (max(system.omega2[-1] + track_coupling(track.fastener_stiffness,
+                                                     track.pad_stiffness), vehicle_k)
+              + k_hertz * np.linalg.eigvalsh(gram).max())
+    gamma = max(track_coupling(track.fastener_damping, track.pad_damping), vehicle_c)
+    return STABILITY_SAFETY * zhai_damped_limit(math.sqrt(omega2), gamma)
 
 
 def _n_steps(scenario: Scenario) -> int:
