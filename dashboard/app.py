@@ -57,13 +57,15 @@ def _slider_step(low: float, high: float) -> float:
     return 10.0 ** math.floor(math.log10((high - low) / 200.0))
 
 
-def parameter_widget(obj: param.Parameterized, name: str) -> pn.widgets.Widget:
-    """Widget for one parameter, built from its label, doc, softbounds and current value.
+def parameter_widget(scenario: Scenario, path: str) -> pn.widgets.Widget:
+    """Widget for one parameter (``"section.name"``), from its label, doc, softbounds and value.
 
     Numbers get an editable slider over their soft bounds whose text box accepts any value
     (the parameter itself refuses what is out of its hard bounds); optional numbers get a text
-    box where empty means "automatic".
+    box where empty means "automatic". The widget has the CSS class ``param-section-name``.
     """
+    section, _, name = path.partition(".")
+    obj = getattr(scenario, section)
     p = obj.param[name]
     value = getattr(obj, name)
     if isinstance(p, param.Boolean):
@@ -83,7 +85,24 @@ def parameter_widget(obj: param.Parameterized, name: str) -> pn.widgets.Widget:
         value = "" if value is None else str(value)
     if "description" in cls.param:  # sliders and checkboxes have no tooltip
         kwargs["description"] = p.doc
-    return cls(label=p.label, value=value, sizing_mode="stretch_width", **kwargs)
+    return cls(label=p.label, value=value, sizing_mode="stretch_width",
+               css_classes=[f"param-{section}-{name}"], **kwargs)
+
+
+def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
+    """A collapsed card whose contents are rendered only when it is first opened.
+
+    Rendering every group's ~50 widgets up front (each editable slider carries a JavaScript
+    link) costs seconds of page load; most sessions never open most groups.
+    """
+    card = pn.Card(collapsed=True, sizing_mode="stretch_width", **params)
+
+    def fill(event):
+        if not event.new and not card.objects:
+            card.objects = members
+
+    card.param.watch(fill, "collapsed")
+    return card
 
 
 def _widget_value_event(widget: pn.widgets.Widget) -> str:
@@ -133,7 +152,7 @@ class Dashboard(pn.viewable.Viewer):
         self._progress_state = ("", 0.0)
 
         self.widgets = {
-            f"{section}.{name}": parameter_widget(getattr(self.scenario, section), name)
+            f"{section}.{name}": parameter_widget(self.scenario, f"{section}.{name}")
             for section in SECTIONS
             for name in getattr(self.scenario, section).param
             if name != "name" and f"{section}.{name}" not in HIDDEN
@@ -227,8 +246,7 @@ class Dashboard(pn.viewable.Viewer):
                        if path.startswith(f"{section}.") and path not in PRIMARY]
             if section == "train":
                 members.insert(0, self.train_type)
-            groups.append(pn.Card(*members, title=title, collapsed=True,
-                                  sizing_mode="stretch_width", css_classes=[f"group-{section}"]))
+            groups.append(_lazy_card(members, title=title, css_classes=[f"group-{section}"]))
         files = pn.Card(self.save_button, pn.pane.Markdown("Load a scenario file:", margin=(0, 5)),
                         self.load_input, title="Scenario file", collapsed=True,
                         sizing_mode="stretch_width")

@@ -18,7 +18,8 @@ import panel as pn
 from bokeh.document import Document
 from bokeh.models import ImportedStyleSheet, InlineStyleSheet
 from bokeh.resources import INLINE
-from panel.io.resources import CDN_DIST, DIST_DIR
+from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
+from panel.io.state import set_curdoc
 
 from dashboard import plots
 from model.__main__ import load_scenario
@@ -84,7 +85,10 @@ def _packaged_stylesheet(sheet):
 def report_html(results: Results) -> str:
     """The report as one self-contained HTML document (inline JS and CSS)."""
     document = Document()
-    root = build_report(results).get_root(document)
+    # A document of its own even inside a served session (Panel caches stylesheet models per
+    # current document), with stylesheet links in CDN form, whatever the session uses.
+    with set_curdoc(document), set_resource_mode("cdn"):
+        root = build_report(results).get_root(document)
     document.add_root(root)
     # INLINE resources inline the JavaScript but Panel still links component stylesheets from
     # its CDN (holoviz/panel#6759); swap them for the packaged files so the file works offline.

@@ -28,7 +28,10 @@ MAX_DISPLAY_POINTS = 4000
 MM, KN = 1e3, 1e-3  # m → mm, N → kN
 PLOT_HEIGHT = 300  # px
 
-_COMMON = {"responsive": True, "height": PLOT_HEIGHT, "tools": ["hover"], "show_grid": True}
+# Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
+# falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
+_COMMON = {"responsive": True, "height": PLOT_HEIGHT, "tools": ["hover"], "show_grid": True,
+           "backend_opts": {"plot.output_backend": "canvas"}}
 
 
 @dataclass(frozen=True)

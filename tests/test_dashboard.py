@@ -14,6 +14,9 @@ import numpy as np
 import panel as pn
 import param
 import pytest
+from bokeh.document import Document
+from panel.io.resources import set_resource_mode
+from panel.io.state import set_curdoc
 
 from dashboard import plots
 from dashboard.app import HIDDEN, PRIMARY, Dashboard
@@ -153,6 +156,21 @@ def test_app_builds_with_a_widget_for_every_parameter(dashboard):
     assert set(dashboard.widgets) == expected - HIDDEN
     assert set(PRIMARY) <= set(dashboard.widgets)
     pn.Row(dashboard).get_root()  # the whole layout renders to Bokeh models
+
+
+def test_groups_hold_every_other_parameter_and_render_when_opened(dashboard):
+    """Groups start collapsed and empty (fast page load) and fill on first opening."""
+    cards = [item for item in dashboard.sidebar() if isinstance(item, pn.Card)]
+    grouped = {}
+    for card in cards[:-1]:  # the last card holds the scenario file controls
+        assert card.collapsed and not card.objects
+        card.collapsed = False
+        grouped[card.title] = [w for w in card.objects if w in dashboard.widgets.values()]
+    in_groups = {path for path, w in dashboard.widgets.items()
+                 if any(w in members for members in grouped.values())}
+    assert in_groups == set(dashboard.widgets) - set(PRIMARY)
+    assert dashboard.train_type in cards[0].objects
+    assert dashboard.widgets["soil.poisson_ratio"] in grouped["Soil"]
 
 
 def test_widgets_take_label_range_and_value_from_the_params(dashboard):
@@ -351,9 +369,17 @@ def test_report_is_self_contained_and_complete(results):
 
 
 def test_report_download_button_serves_the_report(dashboard):
-    data = dashboard._report_file()
+    """Inside a served session (a current document holding the page) the report still builds
+    in a document of its own, with every stylesheet inlined."""
+    session_doc = Document()
+    with set_curdoc(session_doc), set_resource_mode("server"):
+        dashboard.template().server_doc(session_doc)
+        data = dashboard._report_file()
     assert isinstance(data, io.BytesIO)
-    assert data.getvalue().startswith(b"<!DOCTYPE html>")
+    text = data.getvalue().decode("utf-8")
+    assert text.startswith("<!DOCTYPE html>")
+    assert not EXTERNAL_TAG.search(text)
+    assert '"name":"ImportedStyleSheet"' not in text
 
 
 def test_export_command_line_writes_the_report(tmp_path, capsys):

@@ -1,0 +1,257 @@
+"""The served dashboard in a real browser (headless Debian Chromium driven by Playwright).
+
+`panel serve dashboard/app.py` runs on a free port; every test loads the page with the cheap
+single-bogie scenario and drives it as a user would. The helpers here are also used by
+``benchmarks/bench_dashboard.py``. Never downloads a browser: Debian's ``/usr/bin/chromium``
+is used, and the tests are skipped (with that reason) only when it is absent.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                 "--disable-component-update", "--no-first-run"]
+CHEAP_QUERY = "preset=single_bogie&train.speed_kmh=100&numerics.n_depths=11"
+PLOT_TITLES = ("Sleeper (block) displacement", "Invert load", "Invert line-load PSD",
+               "Interface displacement PSD", "Peak dynamic displacement against depth")
+STAGE_OF_PLOT = {"Sleeper (block) displacement": "vehicle_track", "Invert load": "vehicle_track",
+                 "Invert line-load PSD": "load", "Interface displacement PSD": "soil",
+                 "Peak dynamic displacement against depth": "soil"}
+SERVER_START_S = 90.0  # cold imports on a busy 2-core machine
+RUN_WAIT_MS = 120_000  # a page action that runs the pipeline
+
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.slow,
+    pytest.mark.skipif(not CHROMIUM.exists(),
+                       reason="Debian Chromium (/usr/bin/chromium) is not installed"),
+]
+
+# Every Bokeh figure on the page: model id, title and number of data points it draws.
+FIGURES_JS = """() => {
+  const figures = [];
+  for (const doc of (window.Bokeh ? window.Bokeh.documents : [])) {
+    for (const model of doc.all_models) {
+      if (model.type !== "Figure") continue;
+      let points = 0;
+      for (const renderer of model.renderers) {
+        if (renderer.data_source) points += renderer.data_source.get_length() ?? 0;
+      }
+      figures.push({id: model.id, title: model.title ? model.title.text : "", points: points});
+    }
+  }
+  return figures;
+}"""
+
+
+def free_port() -> int:
+    """A TCP port nobody listens on right now."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+@contextlib.contextmanager
+def serve_app(log_path: Path) -> Iterator[str]:
+    """Run ``panel serve dashboard/app.py`` on a free port; yield the app's URL."""
+    port = free_port()
+    command = [sys.executable, "-m", "panel", "serve", "dashboard/app.py", "--port", str(port),
+               "--address", "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}"]
+    with log_path.open("w") as log:
+        process = subprocess.Popen(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
+        try:
+            deadline = time.monotonic() + SERVER_START_S
+            while True:
+                if process.poll() is not None:
+                    raise RuntimeError(f"panel serve exited: {log_path.read_text()}")
+                with contextlib.suppress(OSError), socket.create_connection(
+                        ("127.0.0.1", port), timeout=1):
+                    break
+                if time.monotonic() > deadline:
+                    raise RuntimeError(f"panel serve did not answer: {log_path.read_text()}")
+                time.sleep(0.2)
+            yield f"http://127.0.0.1:{port}/app"
+        finally:
+            process.terminate()
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+
+
+def launch_chromium(playwright):
+    """Debian's Chromium, headless."""
+    return playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+
+
+def figures(page) -> list[dict]:
+    """Every Bokeh figure on the page (id, title, points drawn)."""
+    return page.evaluate(FIGURES_JS)
+
+
+def wait_for_plots(page, timeout_ms: float = RUN_WAIT_MS) -> list[dict]:
+    """Wait until every dashboard plot is drawn with data; return the figures."""
+    page.wait_for_function(
+        f"""() => {{
+          const shown = ({FIGURES_JS})().filter(f => f.points > 0).map(f => f.title);
+          return {list(PLOT_TITLES)!r}.every(t => shown.includes(t));
+        }}""", timeout=timeout_ms)
+    return figures(page)
+
+
+def render_counts(page) -> dict[str, int]:
+    """How many times each stage's plots have been drawn, from the status line."""
+    counts = {}
+    for item in page.locator(".stage-status").all():
+        counts[item.get_attribute("data-stage")] = int(item.get_attribute("data-renders"))
+    return counts
+
+
+def wait_for_renders(page, stage: str, count: int, timeout_ms: float = RUN_WAIT_MS) -> None:
+    """Wait until the plots of ``stage`` have been drawn ``count`` times."""
+    page.locator(f'.stage-status[data-stage="{stage}"][data-renders="{count}"]').wait_for(
+        timeout=timeout_ms)
+
+
+def summary_values(page) -> dict[str, str]:
+    """Key numbers as shown, by key."""
+    return {item.get_attribute("data-key"): item.inner_text()
+            for item in page.locator(".summary-pane .value, .soil-pane .value").all()}
+
+
+def open_dashboard(page, url: str, query: str = CHEAP_QUERY) -> None:
+    """Load the dashboard and wait for its first results."""
+    page.goto(f"{url}?{query}")
+    wait_for_renders(page, "soil", 1)
+    wait_for_plots(page)
+
+
+def drag_slider(page, path: str, fraction: float) -> None:
+    """Drag a parameter's slider handle by ``fraction`` of the track, in small mouse steps."""
+    widget = page.locator(f".param-{path.replace('.', '-')}")
+    track = widget.locator(".noUi-base").bounding_box()
+    handle = widget.locator(".noUi-handle").bounding_box()
+    x, y = handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + fraction * track["width"], y, steps=12)
+    page.mouse.up()
+
+
+def type_value(page, path: str, text: str) -> None:
+    """Type a value into a parameter's text box and press Enter."""
+    box = page.locator(f".param-{path.replace('.', '-')} input").first
+    box.fill(text)
+    box.press("Enter")
+
+
+@pytest.fixture(scope="module")
+def app_url(tmp_path_factory):
+    with serve_app(tmp_path_factory.mktemp("server") / "panel.log") as url:
+        yield url
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        chromium = launch_chromium(playwright)
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture
+def page(browser, app_url):
+    context = browser.new_context(viewport={"width": 1400, "height": 1000},
+                                  accept_downloads=True)
+    page = context.new_page()
+    open_dashboard(page, app_url)
+    yield page
+    context.close()
+
+
+def test_every_plot_renders_with_data(page):
+    shown = {f["title"]: f["points"] for f in figures(page)}
+    assert set(PLOT_TITLES) <= set(shown)
+    assert all(shown[title] > 10 for title in PLOT_TITLES), shown
+    values = summary_values(page)
+    for key in ("peak_invert_force", "peak_block_disp", "peak_disp_invert", "peak_disp_11m",
+                "peak_disp_deepest", "soil_p_wave_speed", "soil_s_wave_speed",
+                "soil_lame_lambda", "soil_shear_modulus"):
+        assert re.fullmatch(r"[-\d.e+]+ \S+", values[key]), (key, values.get(key))
+    assert not page.locator(".error-alert").is_visible()
+
+
+def test_speed_slider_changes_the_numbers_with_one_run_per_drag(page):
+    before = summary_values(page)
+    drag_slider(page, "train.speed_kmh", -0.15)
+    wait_for_renders(page, "vehicle_track", 2)
+    wait_for_renders(page, "soil", 2)
+    after = summary_values(page)
+    for key in ("peak_invert_force", "peak_block_disp", "peak_disp_invert"):
+        assert after[key] != before[key], key
+    assert after["soil_s_wave_speed"] == before["soil_s_wave_speed"]  # the soil did not change
+    page.wait_for_timeout(1000)  # a second run for the same drag would show up by now
+    assert render_counts(page) == {"vehicle_track": 2, "load": 2, "soil": 2}
+
+
+def test_soil_slider_recomputes_only_the_soil_plots(page):
+    ids_before = {f["title"]: f["id"] for f in figures(page)}
+    before = summary_values(page)
+    drag_slider(page, "soil.youngs_modulus", 0.1)
+    wait_for_renders(page, "soil", 2)
+    shown = wait_for_plots(page)
+    ids_after = {f["title"]: f["id"] for f in shown}
+    for title, stage in STAGE_OF_PLOT.items():
+        assert (ids_after[title] != ids_before[title]) == (stage == "soil"), title
+    assert render_counts(page) == {"vehicle_track": 1, "load": 1, "soil": 2}
+    assert "cached" in page.locator(".stage-status[data-stage='vehicle_track']").inner_text()
+    after = summary_values(page)
+    assert after["soil_s_wave_speed"] != before["soil_s_wave_speed"]
+    assert after["peak_disp_invert"] != before["peak_disp_invert"]
+    assert after["peak_block_disp"] == before["peak_block_disp"]
+
+
+def test_invalid_value_shows_a_clear_message(page):
+    type_value(page, "soil.youngs_modulus", "-5")
+    message = page.locator(".error-alert li")  # the alert's text lives in its shadow root
+    message.wait_for(timeout=RUN_WAIT_MS)
+    text = message.inner_text()
+    assert "youngs_modulus" in text and "-5" in text and "outside the allowed range" in text
+    assert page.get_by_text("Traceback").count() == 0
+    assert render_counts(page) == {"vehicle_track": 1, "load": 1, "soil": 1}
+
+
+def test_exported_report_opens_offline_with_every_plot(page, browser, tmp_path):
+    with page.expect_download(timeout=RUN_WAIT_MS) as download:
+        page.locator(".report-button button").click()
+    report = tmp_path / "report.html"
+    download.value.save_as(report)
+    assert report.stat().st_size > 100_000  # inline BokehJS and Panel JS
+
+    offline = browser.new_context(offline=True)
+    network = []
+    offline.route(re.compile(r"^https?://"), lambda route: (network.append(route.request.url),
+                                                            route.abort()))
+    viewer = offline.new_page()
+    viewer.goto(report.as_uri())
+    shown = {f["title"]: f["points"] for f in wait_for_plots(viewer, timeout_ms=30_000)}
+    assert all(shown[title] > 10 for title in PLOT_TITLES), shown
+    assert viewer.get_by_text("Key numbers").count() == 1
+    assert '"youngs_modulus": 6000000.0' in viewer.locator("pre.scenario-json").inner_text()
+    assert network == []  # nothing was requested from the network
+    offline.close()
