@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from model.params import Scenario
-from model.pipeline import STAGES, Results, run
+from model.pipeline import STAGES, Results, SimulationError, run
 
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 
@@ -126,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
         finally:
             if progress is not None:
                 progress.close()
-    except (ValueError, KeyError, OSError) as error:
+    except (ValueError, KeyError, OSError, SimulationError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         parser.exit(2, f"error: {message}\n")
     paths = write_results(results, args.out)

@@ -369,7 +369,7 @@ class Numerics(param.Parameterized):
                          label="Rail modes",
                          doc="Modes of the simply supported rail; None means L/L_s (shortest "
                              "modal half-wavelength = block spacing, MODEL.md §2).")
-    rail_end_margin = _q(20.0, (0, None), (20.0, 60.0), "Rail end margin (m)",
+    rail_end_margin = _q(20.0, (20.0, None), (20.0, 60.0), "Rail end margin (m)",
                          "Minimum distance from any axle to a rail end during the run "
                          "(MODEL.md §2: ≥ 20 m).")
     approach_distance = _q(10.0, (0, None), (5.0, 40.0), "Approach distance (m)",

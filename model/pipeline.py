@@ -35,6 +35,11 @@ SOIL_NUMERICS = ("n_harmonics", "soil_max_frequency", "zero_pad_factor", "psd_se
                  "max_depth", "n_depths")
 
 STAGES = ("vehicle_track", "load", "soil")
+
+
+class SimulationError(RuntimeError):
+    """The vehicle–track integration went unstable; its warnings say why and what to change."""
+
 Progress = Callable[[str, float], None]
 
 
@@ -167,6 +172,13 @@ def run(scenario: Scenario, progress: Progress | None = None,
     Returns
     -------
     Results
+
+    Raises
+    ------
+    ValueError
+        Bad or inconsistent inputs (before any computation).
+    SimulationError
+        The explicit integration diverged (its message names the limit on ``numerics.dt``).
     """
     from model.vehicle_track import check_inputs
 
@@ -194,6 +206,9 @@ def run(scenario: Scenario, progress: Progress | None = None,
 
     vt = stage("vehicle_track",
                lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f)))
+    if vt.unstable:
+        raise SimulationError("the vehicle–track simulation went unstable: "
+                              + "; ".join(vt.warnings))
     load = stage("load", lambda: _load_stage(vt, scenario))
     soil = stage("soil", lambda: soil_response(load.line_load_N_per_m, _time_step(load.t_s),
                                                scenario.tunnel, scenario.soil,

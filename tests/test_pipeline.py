@@ -137,6 +137,20 @@ def test_inconsistent_scenario_is_refused_before_any_computation():
     assert sum(cache.misses.values()) == 0
 
 
+def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch):
+    """Δt = 2.5e-4 s is beyond the explicit limit; with the input check bypassed the run
+    diverges, and the pipeline refuses to feed a truncated record to the soil stage."""
+    from model import vehicle_track
+
+    scenario = cheap_scenario()
+    scenario.numerics.dt = 2.5e-4
+    monkeypatch.setattr(vehicle_track, "stable_time_step", lambda s: 1.0)
+    cache = StageCache()
+    with pytest.raises(pipeline.SimulationError, match="went unstable.*numerics.dt"):
+        run(scenario, cache=cache)
+    assert cache.misses["load"] == cache.misses["soil"] == 0
+
+
 # ---- command line ---------------------------------------------------------------------------
 
 CHEAP_SET = ["--preset", "single_bogie", "--set", "train.speed_kmh=100",
