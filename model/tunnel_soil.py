@@ -119,7 +119,7 @@ def _k01_continued_fraction(z):
         q2 = q_new
         q += c * q_new
         b += 2.0
-        d = 1.0 / (b + a * d)
+        d = _reciprocal(b + a * d)
         delh = (b * d - 1.0) * delh
         h += delh
         ds = q * delh

@@ -113,17 +113,23 @@ def kelvin_log_slope(soil):
 
 @pytest.mark.parametrize("soil_name", ["undamped", "paper", "stiff_lame"])
 def test_interface_receptance_grows_like_log_of_one_over_frequency(soil_name):
-    """2D line load: H(f) ≈ A + B ln f as f → 0 with Kelvin's B, at the interface.
+    """2D line load: H(f) = A + B ln f + O((ωa/c₂)² ln ω) as f → 0, with Kelvin's B.
 
     The coefficient of ln is fixed by the net force alone, so it holds for the real, stiff
-    lining, whose K/a ≫ μ would amplify rounding in a naive P/SV basis. Down to 1e-5 Hz the
-    physical corrections O((ωa/c₂)² ln) are ≤ 1e-9 and the interface values are exact to
-    rounding (module docstring): tolerance 1e-7 on (H(2f) − H(f))/ln 2.
+    lining, whose K/a ≫ μ would amplify rounding in a naive P/SV basis. The relative error of
+    the slope (H(2f) − H(f))/ln 2 must be the physical curvature only: it falls like f²
+    (observed order 1.8–1.9, the ln makes it < 2; fit 1.6–2.1) from 1e-3 to 1e-5 Hz, where it
+    is < 1e-8 (observed 4e-9); rounding would instead grow as f falls.
     """
     soil = SOILS[soil_name]
-    for freq in (1e-5, 1e-4, 1e-3):
-        h = invert_receptance([freq, 2 * freq], 0.0, Tunnel(), soil, 32)[:, 0]
-        assert (h[1] - h[0]) / np.log(2.0) == pytest.approx(kelvin_log_slope(soil), rel=1e-7)
+    freq = np.array([1e-5, 1e-4, 1e-3])
+    errors = []
+    for f in freq:
+        h = invert_receptance([f, 2 * f], 0.0, Tunnel(), soil, 32)[:, 0]
+        errors.append(abs((h[1] - h[0]) / np.log(2.0) / kelvin_log_slope(soil) - 1))
+    order = np.polyfit(np.log(freq), np.log(errors), 1)[0]
+    assert 1.6 < order < 2.1
+    assert errors[0] < 1e-8 and errors[2] < 3e-5
 
 
 @pytest.mark.parametrize("soil_name", ["undamped", "paper"])
@@ -180,22 +186,24 @@ def test_soil_field_satisfies_navier_equations(soil_name):
     """The summed field solves μ*∇²u + (λ*+μ*)∇(∇·u) + ρω²u = 0 in the soil.
 
     Central differences have error O(h²): the residual must fall at observed order ≈ 2
-    (fit 1.8–2.2) and be below 2e-4 of the inertia term at h = 2.5 cm (truncation
-    ≈ (n/r)² h²/12 with n/r ≲ 6 1/m gives ≈ 2e-5; rounding ε/(kh)² ≈ 1e-10).
+    (fit 1.8–2.2; observed 2.00) and be below 5e-4 of the inertia term at h = 2.5 cm
+    (observed 1.4e-4: the point 0.47 m from the lining carries harmonics up to n = 24, whose
+    truncation is ~(n/r)² h²/12 of their size; rounding ε/(kh)² ≈ 1e-10).
     """
     soil, tunnel = SOILS[soil_name], Tunnel()
     steps = np.array([0.2, 0.1, 0.05, 0.025])
     residuals = np.array([navier_residual(h, soil, tunnel) for h in steps])
     order = np.polyfit(np.log(steps), np.log(residuals), 1)[0]
     assert 1.8 < order < 2.2
-    assert residuals[-1] < 2e-4
+    assert residuals[-1] < 5e-4
 
 
 def test_stresses_are_hookes_law_of_the_displacement_gradient():
     """σ from the module equals λ*(∇·u)I + μ*(∇u + ∇uᵀ) with ∇u by central differences.
 
-    Step 1 mm: truncation ≈ (n/r)² h²/6 ≈ 1e-5 relative; rounding ≈ ε/(kh) ≈ 3e-13. Tolerance
-    1e-4 of the largest stress component at each point.
+    Step 1 mm: truncation ≲ (n/r)² h²/6 ≈ 9e-6 relative (n ≤ 24 at r ≥ 3.3 m), rounding
+    ≈ ε/(kh) ≈ 3e-13; tolerance 1e-5 of the largest stress component at each point (observed
+    1.6e-7).
     """
     soil, tunnel = Soil(), Tunnel()
     shear, lame = complex_moduli(soil)
@@ -212,7 +220,7 @@ def test_stresses_are_hookes_law_of_the_displacement_gradient():
                          lame * divergence + 2 * shear * du_dy[1],
                          shear * (du_dy[0] + du_dx[1])])
     scale = np.abs(stress).max(axis=0)
-    assert np.all(np.abs(stress - expected) / scale < 1e-4)
+    assert np.all(np.abs(stress - expected) / scale < 1e-5)
 
 
 def test_ring_obeys_newtons_second_law_as_a_whole():
@@ -231,8 +239,7 @@ def test_ring_obeys_newtons_second_law_as_a_whole():
     traction = np.pi * a * coefficient * (field.sigma_rr[:, 0] - field.sigma_rtheta[:, 0])
     momentum = np.pi * a * coefficient * (field.u_r[:, 0] - field.u_theta[:, 0])
     omega2 = (2 * np.pi * freq) ** 2
-    np.testing.assert_allclose(1.0 + traction, -omega2 * mass * momentum, rtol=1e-10,
-                               atol=1e-12)
+    np.testing.assert_allclose(1.0 + traction, -omega2 * mass * momentum, rtol=1e-10)
 
 
 # ---- small cavity → full-space line-load Green's function -----------------------------------

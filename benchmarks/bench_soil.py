@@ -1,0 +1,75 @@
+"""Time the tunnel–soil stage.
+
+Run: ``python benchmarks/bench_soil.py``. Prints, for the first call (Numba compilation or
+loading it from the cache) and the best of N warm calls:
+
+- ``invert_receptance`` for 64 harmonics × 4096 frequencies (0.024–100 Hz) × 50 depths
+  (0–35 m); target ≤ 1 s;
+- the whole soil stage ``soil_response`` for the paper preset: a 6.66 s line load at 1e-4 s
+  (the synthetic six-car train of tests/test_settlement.py), default numerics (32 harmonics,
+  100 Hz, padding 8, 71 depths); target ≤ 1 s.
+
+Timings are wall-clock on a shared machine: read the best of N.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from model.params import Scenario, Soil, Tunnel  # noqa: E402
+from model.settlement import soil_response  # noqa: E402
+from model.tunnel_soil import invert_receptance  # noqa: E402
+from tests.test_settlement import synthetic_train_load  # noqa: E402
+
+REPEATS = 7
+
+
+def best_of(function, repeats: int) -> tuple[float, float]:
+    """Seconds of the first call and the best of ``repeats`` further calls."""
+    start = time.perf_counter()
+    function()
+    first = time.perf_counter() - start
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        best = min(best, time.perf_counter() - start)
+    return first, best
+
+
+def main() -> None:
+    print(f"Numba threads: {numba.get_num_threads()}")
+    tunnel, soil = Tunnel(), Soil()
+    freq = np.linspace(100.0 / 4096, 100.0, 4096)
+    depth = np.linspace(0.0, 35.0, 50)
+    first, best = best_of(lambda: invert_receptance(freq, depth, tunnel, soil, 64), REPEATS)
+    print(f"invert_receptance 64 harmonics x 4096 frequencies x 50 depths: first {first:.3f} s, "
+          f"best of {REPEATS} {best:.3f} s (target 1 s)")
+
+    scenario = Scenario.paper()
+    dt, _, load, *_ = synthetic_train_load(scenario)
+    result = None
+
+    def soil_stage():
+        nonlocal result
+        result = soil_response(load, dt, scenario.tunnel, scenario.soil, scenario.numerics)
+
+    first, best = best_of(soil_stage, REPEATS)
+    print(f"soil_response, paper preset, {load.size} samples ({load.size * dt:.2f} s at "
+          f"{dt:g} s): first {first:.3f} s, best of {REPEATS} {best:.3f} s (target 1 s)")
+    rows = [int(np.argmin(np.abs(result.depth_m - d))) for d in (0.0, 11.0, 35.0)]
+    peaks = ", ".join(f"{result.depth_m[r]:g} m: {1e3 * result.peak_disp_m[r]:.2f} mm"
+                      for r in rows)
+    print(f"  synthetic load peak {load.max() / 1e3:.1f} kN/m; peak downward displacement {peaks}")
+
+
+if __name__ == "__main__":
+    main()
