@@ -50,8 +50,8 @@ class _RangeMessage:
         try:
             super()._validate_bounds(val, bounds, inclusive_bounds)
         except ValueError:
-            owner = getattr(self.owner, "name", None) if self.owner is not None else None
-            where = f"{type(self.owner).__name__}.{self.name}" if owner else self.name
+            owner = self.owner if isinstance(self.owner, type) else type(self.owner)
+            where = f"{owner.__name__}.{self.name}" if self.owner is not None else self.name
             raise ValueError(
                 f"{where} = {val!r} is outside the allowed range "
                 f"{_format_range(bounds, inclusive_bounds)} ({self.label})"
@@ -546,13 +546,6 @@ class Scenario(param.Parameterized):
         """Simulated time (s): leading axle from approach to trailing axle past the block."""
         travel = 2.0 * self.numerics.approach_distance + self.train.axle_span
         return travel / self.train.speed
-
-    @property
-    def depths(self) -> list[float]:
-        """Output depths below the invert (m)."""
-        n = self.numerics
-        step = n.max_depth / (n.n_depths - 1)
-        return [i * step for i in range(n.n_depths)]
 
     def validate(self) -> None:
         """Check constraints between parameters; raise :class:`ScenarioError` listing all."""

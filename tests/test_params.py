@@ -123,6 +123,11 @@ def test_every_parameter_has_label_doc_and_softbounds_inside_bounds(cls, name, p
     assert default is None or (soft_low <= default <= soft_high), "default outside slider range"
 
 
+def test_constructor_arguments_are_checked_with_the_same_message():
+    with pytest.raises(ValueError, match=r"^Soil.poisson_ratio = 0.7 is outside the allowed range"):
+        Soil(poisson_ratio=0.7)
+
+
 def test_nan_is_refused():
     with pytest.raises(ValueError, match="Soil.youngs_modulus"):
         Soil().youngs_modulus = float("nan")
