@@ -11,6 +11,7 @@ URL query arguments choose the initial scenario: ``?preset=single_bogie`` and an
 from __future__ import annotations
 
 import asyncio
+import html
 import io
 import json
 import logging
@@ -19,8 +20,10 @@ import re
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
+import holoviews as hv
 import panel as pn
 import param
+from holoviews.streams import Pipe
 
 from dashboard import plots
 from dashboard.export import ITEMS_CSS, items_html, report_html
@@ -105,6 +108,13 @@ def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
     return card
 
 
+def _dynamic(draw):
+    """DynamicMap callback drawing the Results a Pipe stream carries."""
+    def callback(data):
+        return draw(data)
+    return callback
+
+
 def _widget_value_event(widget: pn.widgets.Widget) -> str:
     """The widget parameter that signals a finished edit (slider release, Enter, blur)."""
     return "value_throttled" if "value_throttled" in widget.param else "value"
@@ -113,6 +123,11 @@ def _widget_value_event(widget: pn.widgets.Widget) -> str:
 def _markdown_escape(text: str) -> str:
     """Text shown literally inside a Markdown alert."""
     return re.sub(r"([\\`*_{}\[\]<>#|])", r"\\\1", text)
+
+
+def _note_html(text: str) -> str:
+    """Small grey paragraph showing ``text`` literally."""
+    return f'<div style="font-size: 12px; color: #57606a">{html.escape(text)}</div>'
 
 
 def _preset_descriptions() -> dict[str, str]:
@@ -167,9 +182,8 @@ class Dashboard(pn.viewable.Viewer):
             sizing_mode="stretch_width")
         self.preset_select.param.watch(self._on_preset, "value")
         self._preset_descriptions = descriptions
-        self.preset_note = pn.pane.Markdown(descriptions.get(preset, ""), margin=(0, 10),
-                                            styles={"font-size": "12px", "color": "#57606a"},
-                                            sizing_mode="stretch_width")
+        self.preset_note = pn.pane.HTML(_note_html(descriptions.get(preset, "")),
+                                        margin=(0, 10), sizing_mode="stretch_width")
         self.train_type = pn.widgets.Select(
             label="Train type", options=[*TRAIN_TYPES, CUSTOM], value=self._train_type(),
             description="Car length, bogie-centre distance and wheelbase of a standard "
@@ -190,6 +204,8 @@ class Dashboard(pn.viewable.Viewer):
                                     sizing_mode="stretch_width")
         self.soil_summary = pn.pane.HTML("", css_classes=["soil-pane"],
                                          stylesheets=[ITEMS_CSS], sizing_mode="stretch_width")
+        self.plot_streams: dict[str, Pipe] = {}
+        """Per plot, the stream holding the Results it shows (sent only when its stage changed)."""
         self.plot_panes = {
             spec.key: pn.pane.HoloViews(None, sizing_mode="stretch_width", loading=True,
                                         min_height=plots.PLOT_HEIGHT,
@@ -206,7 +222,7 @@ class Dashboard(pn.viewable.Viewer):
         self.load_input.param.watch(self._on_load, "value")
         self.report_button = pn.widgets.FileDownload(
             callback=self._report_file, filename="tunnelsettle_report.html",
-            label="Download HTML report", color="primary", disabled=True,
+            label="Download HTML report", disabled=True,
             sizing_mode="stretch_width", css_classes=["report-button"])
         self._update_soil_summary()
 
@@ -298,7 +314,7 @@ class Dashboard(pn.viewable.Viewer):
         """Replace every input by the chosen preset's."""
         if self._syncing:
             return
-        self.preset_note.object = self._preset_descriptions.get(event.new, "")
+        self.preset_note.object = _note_html(self._preset_descriptions.get(event.new, ""))
         self._replace_scenario(Scenario.preset(event.new))
 
     def _on_train_type(self, event: param.parameterized.Event) -> None:
@@ -468,7 +484,14 @@ class Dashboard(pn.viewable.Viewer):
         for spec in plots.PLOTS:
             pane = self.plot_panes[spec.key]
             if spec.stage in redrawn:
-                pane.object = spec.draw(results)
+                stream = self.plot_streams.get(spec.key)
+                if stream is None:
+                    # the first results create the plot; later ones update its data in place,
+                    # which is far cheaper on both ends than replacing the Bokeh figure
+                    stream = self.plot_streams[spec.key] = Pipe(data=results)
+                    pane.object = hv.DynamicMap(_dynamic(spec.draw), streams=[stream])
+                else:
+                    stream.send(results)
             pane.loading = False
         for stage in redrawn:
             self.render_counts[stage] += 1
@@ -491,7 +514,7 @@ class Dashboard(pn.viewable.Viewer):
             parts.append(f'<span class="stage-status" data-stage="{stage}" '
                          f'data-renders="{self.render_counts[stage]}">'
                          f"{STAGE_NAMES[stage]}: {took}</span>")
-        return '<div class="stages">' + " · ".join(parts) + "</div>"
+        return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
 
     # ---- files ------------------------------------------------------------------------------
     def _scenario_file(self) -> io.StringIO:

@@ -30,8 +30,9 @@ PLOT_HEIGHT = 300  # px
 
 # Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
 # falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
+# framewise: in the dashboard the same plot is updated with new data; its axes must follow.
 _COMMON = {"responsive": True, "height": PLOT_HEIGHT, "tools": ["hover"], "show_grid": True,
-           "backend_opts": {"plot.output_backend": "canvas"}}
+           "framewise": True, "backend_opts": {"plot.output_backend": "canvas"}}
 
 
 @dataclass(frozen=True)
@@ -187,11 +188,11 @@ def summary_items(results: Results) -> list[SummaryItem]:
                     s["peak_line_load_N_per_m"] * KN, "kN/m"),
         SummaryItem("peak_block_disp", "Peak sleeper displacement",
                     s["peak_block_disp_m"] * MM, "mm"),
-        SummaryItem("peak_disp_invert", "Peak displacement at the invert",
+        SummaryItem("peak_disp_invert", "Peak dynamic displacement at the invert",
                     s["peak_disp_invert_m"] * MM, "mm"),
-        SummaryItem("peak_disp_11m", "Peak displacement 11 m below", s["peak_disp_11m_m"] * MM,
+        SummaryItem("peak_disp_11m", "… 11 m below the invert", s["peak_disp_11m_m"] * MM,
                     "mm"),
-        SummaryItem("peak_disp_deepest", f"Peak displacement {deepest:g} m below",
+        SummaryItem("peak_disp_deepest", f"… {deepest:g} m below the invert",
                     s["peak_disp_deepest_m"] * MM, "mm"),
         SummaryItem("min_wheel_force", "Lowest wheel–rail force", s["min_wheel_force_N"] * KN,
                     "kN"),

@@ -59,9 +59,14 @@ def _curves(element):
     return {layer.label: layer for layer in layers}
 
 
+def _shown(board, key):
+    """The element a dashboard plot shows now (its DynamicMap evaluated on its stream)."""
+    return board.plot_panes[key].object[()]
+
+
 def _pane_data(board, key):
     """(x, y) arrays of the first curve shown in a dashboard plot."""
-    curve = next(iter(_curves(board.plot_panes[key].object).values()))
+    curve = next(iter(_curves(_shown(board, key)).values()))
     return curve.dimension_values(0), curve.dimension_values(1)
 
 
@@ -141,7 +146,7 @@ def test_summary_items_are_the_summary_in_display_units(results):
     assert items["peak_block_disp"].value == summary["peak_block_disp_m"] * MM
     assert items["peak_invert_force"].value == summary["peak_invert_force_N"] / 1e3
     assert items["peak_disp_11m"].value == summary["peak_disp_11m_m"] * MM
-    assert items["peak_disp_deepest"].label.endswith("35 m below")
+    assert items["peak_disp_deepest"].label == "… 35 m below the invert"
     soil = {item.key: item for item in plots.soil_items(results.scenario.soil)}
     assert soil["soil_s_wave_speed"].value == results.scenario.soil.s_wave_speed
     assert soil["soil_shear_modulus"].unit == "MPa"
@@ -215,14 +220,17 @@ def test_speed_change_updates_every_plot(dashboard):
 
 
 def test_soil_change_redraws_only_the_soil_plots(dashboard):
-    shown = {key: pane.object for key, pane in dashboard.plot_panes.items()}
+    old = dashboard.results
+    panes = {key: pane.object for key, pane in dashboard.plot_panes.items()}
     summary_before = dashboard.summary.object
     soil_before = dashboard.soil_summary.object
     _release(dashboard.widgets["soil.youngs_modulus"], 12e6)
     assert set(dashboard.results.cached_stages) == {"vehicle_track", "load"}
     for spec in plots.PLOTS:
-        same = dashboard.plot_panes[spec.key].object is shown[spec.key]
-        assert same == (spec.stage != "soil"), spec.key
+        assert dashboard.plot_panes[spec.key].object is panes[spec.key]  # updated in place
+        sent = dashboard.plot_streams[spec.key].data
+        assert (sent is dashboard.results) == (spec.stage == "soil"), spec.key
+        assert (sent is old) == (spec.stage != "soil"), spec.key
     assert dashboard.render_counts == {"vehicle_track": 1, "load": 1, "soil": 2}
     assert dashboard.summary.object != summary_before
     assert dashboard.soil_summary.object != soil_before
