@@ -267,8 +267,7 @@ class Dashboard(pn.viewable.Viewer):
                         self.load_input, title="Scenario file", collapsed=True,
                         sizing_mode="stretch_width")
         return [self.preset_select, self.preset_note, *[self.widgets[path] for path in PRIMARY],
-                *groups, files,
-                self.report_button]
+                *groups, files, self.report_button]
 
     def main(self) -> list[pn.viewable.Viewable]:
         """Main-area contents: run status, messages, key numbers, plots."""
@@ -331,6 +330,7 @@ class Dashboard(pn.viewable.Viewer):
         if event.new is None:
             return
         filename = self.load_input.filename or "the file"
+        self.load_input.clear()  # so that loading the same file again is a new event
         try:
             scenario = Scenario.from_json(event.new.decode("utf-8"))
         except (ValueError, KeyError, TypeError, AttributeError) as error:
@@ -386,6 +386,7 @@ class Dashboard(pn.viewable.Viewer):
         self.error_alert.param.update(object=f"**{headline}**\n\n{lines}", visible=True)
 
     def _clear_error(self) -> None:
+        """Hide the error message."""
         self.error_alert.param.update(object="", visible=False)
 
     def _update_soil_summary(self) -> None:
@@ -449,6 +450,7 @@ class Dashboard(pn.viewable.Viewer):
         self._progress_state = (stage, fraction)
 
     def _show_progress(self) -> None:
+        """Progress bar and status line from the last progress report."""
         stage, fraction = self._progress_state
         if stage:
             overall = (STAGES.index(stage) + fraction) / len(STAGES)
@@ -475,12 +477,11 @@ class Dashboard(pn.viewable.Viewer):
             self._show_error(headline, [_error_text(outcome)])
             for pane in self.plot_panes.values():
                 pane.loading = False
-            self.status.object = '<span class="failed">Last run failed; showing the previous ' \
-                                 'results.</span>' if self.results else ""
+            self.status.object = ('<span class="failed">Last run failed; the plots show the '
+                                  'previous results.</span>' if self.results else "")
             return
         results = outcome
-        keys = stage_keys(results.scenario)
-        redrawn = {stage for stage in STAGES if self._shown_keys.get(stage) != keys[stage]}
+        redrawn = self._stale_stages(results.scenario)
         for spec in plots.PLOTS:
             pane = self.plot_panes[spec.key]
             if spec.stage in redrawn:
@@ -495,7 +496,7 @@ class Dashboard(pn.viewable.Viewer):
             pane.loading = False
         for stage in redrawn:
             self.render_counts[stage] += 1
-        self._shown_keys = keys
+        self._shown_keys = stage_keys(results.scenario)
         self.results = results
         self.summary.object = items_html(plots.summary_items(results), "summary")
         self.warning_alert.param.update(

@@ -4,6 +4,7 @@ All runs use a cheap scenario (single bogie at 100 km/h, 11 output depths) and t
 pipeline; one stage cache per module keeps repeated stages out of the test time.
 """
 
+import asyncio
 import html
 import io
 import json
@@ -237,6 +238,41 @@ def test_soil_change_redraws_only_the_soil_plots(dashboard):
     # doubling E at fixed ν doubles μ (2 × 2.3077 MPa from E = 6 MPa, ν = 0.3)
     assert "4.615 MPa" in dashboard.soil_summary.object
     assert 'data-renders="2"' in dashboard.status.object and "cached" in dashboard.status.object
+
+
+def test_a_run_marks_only_the_plots_it_will_change_as_loading(dashboard):
+    scenario = dashboard.scenario.copy()
+    scenario.soil.density = 1900.0
+    dashboard._start(scenario)
+    assert dashboard.progress.visible
+    for spec in plots.PLOTS:
+        assert dashboard.plot_panes[spec.key].loading == (spec.stage == "soil"), spec.key
+    dashboard._note_progress("soil", 0.5)
+    dashboard._show_progress()
+    assert dashboard.progress.value == 83  # (2 stages done + 0.5) / 3
+    assert "Computing soil… 50%" in dashboard.status.object
+
+
+def test_edits_during_a_run_are_coalesced_into_one_more_run(dashboard, monkeypatch):
+    """Three edits while a run computes give exactly one further run, with the last value."""
+    speeds = []
+    compute = dashboard._compute
+
+    def slow_user_compute(scenario, progress):
+        speeds.append(scenario.train.speed_kmh)
+        if len(speeds) == 1:
+            for speed in (91.0, 92.0, 93.0):
+                dashboard.scenario.train.speed_kmh = speed
+                dashboard.refresh()
+        return compute(scenario, progress)
+
+    monkeypatch.setattr(dashboard, "_compute", slow_user_compute)
+    dashboard.scenario.train.speed_kmh = 90.0
+    dashboard._running = True  # as refresh() does before scheduling the worker
+    asyncio.run(dashboard._run_in_worker())
+    assert speeds == [90.0, 93.0]
+    assert dashboard.results.scenario.train.speed_kmh == 93.0
+    assert not dashboard._running and not dashboard.progress.visible
 
 
 def test_invalid_value_gives_a_clear_message_and_changes_nothing(dashboard):
