@@ -28,7 +28,15 @@ from holoviews.streams import Pipe
 from dashboard import plots
 from dashboard.export import ITEMS_CSS, items_html, report_html
 from model.params import PRESETS_FILE, SECTIONS, Scenario, ScenarioError, Train
-from model.pipeline import DEFAULT_CACHE, STAGES, Results, StageCache, run, stage_keys
+from model.pipeline import (
+    DEFAULT_CACHE,
+    STAGES,
+    Results,
+    SimulationError,
+    StageCache,
+    run,
+    stage_keys,
+)
 
 log = logging.getLogger(__name__)
 
@@ -462,7 +470,7 @@ class Dashboard(pn.viewable.Viewer):
         """Run the pipeline; a failure is returned (to be shown), not raised."""
         try:
             return run(scenario, progress=progress, cache=self.cache)
-        except (ValueError, KeyError) as error:  # ScenarioError is a ValueError
+        except (ValueError, KeyError, SimulationError) as error:  # ScenarioError: ValueError
             return error
         except Exception as error:  # shown in the page; the traceback goes to the server log
             log.exception("pipeline run failed")

@@ -22,9 +22,8 @@ from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
-from model.__main__ import load_scenario
-from model.params import Scenario
-from model.pipeline import Results, run
+from model.__main__ import add_scenario_arguments, load_scenario
+from model.pipeline import Results, SimulationError, run
 
 REPORT_TITLE = "tunnelsettle report"
 # Panel's page template links its favicons from a CDN; empty values keep the file offline.
@@ -114,13 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m dashboard.export",
         description="Run a scenario and write a self-contained HTML report.")
-    source = parser.add_mutually_exclusive_group()
-    source.add_argument("--preset", default="paper", choices=Scenario.preset_names(),
-                        help="named scenario from assets/presets.json (default: paper)")
-    source.add_argument("--scenario", type=Path, help="scenario JSON file")
-    parser.add_argument("--set", dest="overrides", action="append", default=[],
-                        metavar="SECTION.PARAM=VALUE",
-                        help="override one parameter, e.g. train.speed_kmh=60 (repeatable)")
+    add_scenario_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="HTML file to write")
     return parser
 
@@ -132,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         results = run(load_scenario(args), cache=None)
         write_report(results, args.out)
-    except (ValueError, KeyError, OSError) as error:
+    except (ValueError, KeyError, OSError, SimulationError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         parser.exit(2, f"error: {message}\n")
     for warning in results.warnings:

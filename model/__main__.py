@@ -21,11 +21,8 @@ from model.pipeline import STAGES, Results, SimulationError, run
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Argument parser of ``python -m model``."""
-    parser = argparse.ArgumentParser(
-        prog="python -m model",
-        description="Run the vehicle–track–tunnel–soil model and write its results.")
+def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--preset`` / ``--scenario`` and the repeatable ``--set`` (read by load_scenario)."""
     source = parser.add_mutually_exclusive_group()
     source.add_argument("--preset", default="paper", choices=Scenario.preset_names(),
                         help="named scenario from assets/presets.json (default: paper)")
@@ -33,6 +30,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="SECTION.PARAM=VALUE",
                         help="override one parameter, e.g. train.speed_kmh=60 (repeatable)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``python -m model``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m model",
+        description="Run the vehicle–track–tunnel–soil model and write its results.")
+    add_scenario_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return parser

@@ -29,26 +29,18 @@ from model.pipeline import StageCache, run
 MM = 1e3
 
 
-def cheap_scenario() -> Scenario:
-    """Single bogie at 100 km/h on a ~65 m rail, 11 output depths: a run of about a second."""
-    scenario = Scenario.preset("single_bogie")
-    scenario.train.speed_kmh = 100.0
-    scenario.numerics.n_depths = 11
-    return scenario
-
-
 @pytest.fixture(scope="module")
 def cache():
     return StageCache()
 
 
 @pytest.fixture(scope="module")
-def results(cache):
+def results(cache, cheap_scenario):
     return run(cheap_scenario(), cache=cache)
 
 
 @pytest.fixture
-def dashboard(cache):
+def dashboard(cache, cheap_scenario):
     board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
     board.refresh()
     return board
@@ -320,7 +312,7 @@ def test_train_type_selector_applies_the_standard_geometry(dashboard):
     assert dashboard.train_type.value == "Custom"
 
 
-def test_preset_selector_replaces_the_scenario_and_the_widgets(cache):
+def test_preset_selector_replaces_the_scenario_and_the_widgets(cache, cheap_scenario):
     board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
     board.refresh = lambda: None  # the paper case is a full-train run; not needed here
     board.preset_select.value = "paper_soil_lame"

@@ -16,16 +16,8 @@ from model.pipeline import StageCache, run
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def cheap_scenario() -> Scenario:
-    """Single bogie at 100 km/h on a 64.8 m rail (~0.8 s, 8 k steps), 11 output depths."""
-    scenario = Scenario.preset("single_bogie")
-    scenario.train.speed_kmh = 100.0
-    scenario.numerics.n_depths = 11
-    return scenario
-
-
 @pytest.fixture(scope="module")
-def results():
+def results(cheap_scenario):
     return run(cheap_scenario(), cache=None)
 
 
@@ -61,11 +53,11 @@ def test_units_and_magnitudes_are_physical(results):
     assert summary["soil_s_wave_speed_m_s"] == pytest.approx(35.806, abs=1e-3)
 
 
-def test_results_carry_the_scenario_that_made_them(results):
+def test_results_carry_the_scenario_that_made_them(results, cheap_scenario):
     assert results.scenario.to_dict() == cheap_scenario().to_dict()
 
 
-def test_cache_serves_exactly_the_stages_a_change_does_not_touch():
+def test_cache_serves_exactly_the_stages_a_change_does_not_touch(cheap_scenario):
     cache = StageCache()
     scenario = cheap_scenario()
     first = run(scenario, cache=cache)
@@ -106,7 +98,7 @@ def test_every_numerics_parameter_is_in_some_stage_key():
     assert used == set(Numerics.param) - {"name"}
 
 
-def test_progress_reports_each_stage_in_order_from_zero_to_one():
+def test_progress_reports_each_stage_in_order_from_zero_to_one(cheap_scenario):
     calls = []
     run(cheap_scenario(), progress=lambda stage, f: calls.append((stage, f)), cache=None)
     stages = [stage for stage, _ in calls]
@@ -128,7 +120,7 @@ def test_fast_train_on_soft_soil_and_short_records_give_warnings_not_errors():
     assert any("less than numerics.psd_segment = 4 s" in w for w in warnings)
 
 
-def test_inconsistent_scenario_is_refused_before_any_computation():
+def test_inconsistent_scenario_is_refused_before_any_computation(cheap_scenario):
     cache = StageCache()
     scenario = cheap_scenario()
     scenario.irregularity.wavelength_min = 80.0
@@ -137,7 +129,7 @@ def test_inconsistent_scenario_is_refused_before_any_computation():
     assert sum(cache.misses.values()) == 0
 
 
-def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch):
+def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch, cheap_scenario):
     """Δt = 2.5e-4 s is beyond the explicit limit; with the input check bypassed the run
     diverges, and the pipeline refuses to feed a truncated record to the soil stage."""
     from model import vehicle_track
