@@ -28,12 +28,25 @@ def checked_record(x, dt_s) -> np.ndarray:
     return record
 
 
+def welch_tiling(n_samples: int, n_target: int) -> tuple[int, int]:
+    """Segment length and hop (samples) near ``n_target`` and half of it whose segments, with at
+    least 50 % overlap, start at sample 0 and end exactly at the last sample."""
+    if n_samples <= n_target:
+        return n_samples, n_samples
+    n_segments = max(2, round(2 * n_samples / n_target - 1))
+    hop = n_samples // (n_segments + 1)
+    return n_samples - (n_segments - 1) * hop, hop
+
+
 def one_sided_psd(x, dt_s: float, segment_s: float) -> tuple[np.ndarray, np.ndarray]:
     """One-sided power spectral density by Welch's method.
 
-    Hann window (periodic), segments of ``segment_s`` with 50 % overlap, each segment's mean
-    removed (constant detrending), density scaling. A record shorter than ``segment_s`` is
-    analysed whole as one segment.
+    Hann window (periodic), segments of about ``segment_s`` overlapping by at least 50 %, each
+    segment's mean removed (constant detrending), density scaling. The segment length and hop
+    are adjusted (by less than one hop) so that the segments tile the record exactly: a train
+    passage is a transient, and plain Welch would drop the samples after the last whole
+    segment, where the trailing bogie passes. A record shorter than ``segment_s`` is analysed
+    whole as one segment.
 
     Normalisation (Parseval, exact): Σ psd · Δf equals the average over segments of the
     Hann-weighted mean square of the mean-removed segment, Σ w²(x − x̄)² / Σ w². For a
@@ -58,9 +71,9 @@ def one_sided_psd(x, dt_s: float, segment_s: float) -> tuple[np.ndarray, np.ndar
     record = checked_record(x, dt_s)
     if not (np.isfinite(segment_s) and segment_s > 0.0):
         raise ValueError(f"segment_s = {segment_s!r} is outside the allowed range (0, inf) s")
-    n_segment = int(min(record.size, max(2, round(segment_s / dt_s))))
+    n_segment, hop = welch_tiling(record.size, max(2, round(segment_s / dt_s)))
     return scipy.signal.welch(record, fs=1.0 / dt_s, window="hann", nperseg=n_segment,
-                              noverlap=n_segment // 2, detrend="constant",
+                              noverlap=n_segment - hop, detrend="constant",
                               return_onesided=True, scaling="density")
 
 

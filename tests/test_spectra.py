@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from model.spectra import fourier_transform, one_sided_psd
+from model.spectra import fourier_transform, one_sided_psd, welch_tiling
 
 
-def hann_weighted_mean_square(x, n_segment):
-    """Average over 50 %-overlapping segments of Σ w²(x − x̄)² / Σ w², periodic Hann window."""
+def hann_weighted_mean_square(x, n_segment, hop=None):
+    """Average over segments (hop default n/2) of Σ w²(x − x̄)² / Σ w², periodic Hann window."""
     window = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n_segment) / n_segment)
-    starts = range(0, x.size - n_segment + 1, n_segment // 2)
+    starts = range(0, x.size - n_segment + 1, hop or n_segment // 2)
     values = [np.sum(window**2 * (x[s:s + n_segment] - x[s:s + n_segment].mean()) ** 2)
               / np.sum(window**2) for s in starts]
     return np.mean(values)
@@ -19,11 +19,35 @@ def test_psd_integral_equals_the_window_weighted_variance_exactly():
     """Parseval per segment, exact up to rounding (rtol 1e-12), for an arbitrary record."""
     rng = np.random.default_rng(3)
     dt, segment = 1e-3, 0.5
-    x = np.cumsum(rng.normal(size=5321)) + 40.0  # non-stationary, non-zero mean
+    x = np.cumsum(rng.normal(size=5250)) + 40.0  # non-stationary, non-zero mean; 21 hops
     f_hz, psd = one_sided_psd(x, dt, segment)
     df = f_hz[1] - f_hz[0]
     assert df == pytest.approx(1 / segment)
     assert np.sum(psd) * df == pytest.approx(hann_weighted_mean_square(x, 500), rel=1e-12)
+
+
+@pytest.mark.parametrize("n_samples", [5321, 66645, 1999])
+def test_segments_tile_the_whole_record(n_samples):
+    """Segments start at 0, end at the last sample, overlap ≥ 50 %, stay within one hop of the
+    requested length; Parseval then holds exactly (rtol 1e-12) with the adjusted tiling."""
+    n_target = 500
+    n_segment, hop = welch_tiling(n_samples, n_target)
+    n_segments = (n_samples - n_segment) // hop + 1
+    assert (n_segments - 1) * hop + n_segment == n_samples
+    assert n_segment >= 2 * hop and abs(n_segment - n_target) <= hop
+    x = np.random.default_rng(1).normal(size=n_samples)
+    f_hz, psd = one_sided_psd(x, 1e-3, n_target * 1e-3)
+    assert np.sum(psd) * (f_hz[1] - f_hz[0]) == pytest.approx(
+        hann_weighted_mean_square(x, n_segment, hop), rel=1e-12)
+
+
+def test_a_pulse_at_the_end_of_the_record_is_analysed():
+    """A pulse two samples before the end of a record that does not tile into whole 50 %
+    segments still carries energy into the PSD (plain Welch would drop it)."""
+    x = np.zeros(5321)
+    x[-3] = 1.0
+    f_hz, psd = one_sided_psd(x, 1e-3, 0.5)
+    assert np.sum(psd) > 0.0
 
 
 def test_psd_of_a_sinusoid_integrates_to_its_variance_at_its_frequency():
