@@ -281,7 +281,8 @@ def profile_for(irregularity: Irregularity, x_m) -> np.ndarray:
     irregularity : model.params.Irregularity
         Irregularity settings.
     x_m : array_like
-        Positions along the rail (m), 1-D.
+        Positions along the track (m), 1-D. The vehicle–track model measures them from the
+        monitored block (negative before it), and so must a measured profile's x column.
 
     Returns
     -------

@@ -256,8 +256,8 @@ class Irregularity(param.Parameterized):
                          doc="Number of cosines in the trigonometric series.")
     profile_csv = param.String(
         None, allow_None=True, label="Measured profile CSV",
-        doc="Path of a measured profile (columns x in m, η in m or mm); replaces the synthetic "
-            "profile when set.")
+        doc="Path of a measured profile (columns x in m measured from the monitored block, η in "
+            "m or mm); replaces the synthetic profile when set.")
 
     @property
     def roughness_cm2_rad_per_m(self) -> float:

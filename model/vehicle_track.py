@@ -286,7 +286,11 @@ def _wheel_start_positions(scenario: Scenario) -> np.ndarray:
 
 
 def _build_model(scenario: Scenario, duration: float) -> _Model:
-    """Kernel data for ``scenario``, with the irregularity sampled where the wheels run."""
+    """Kernel data for ``scenario``, with the irregularity sampled where the wheels run.
+
+    Profile positions are measured from the monitored block, so the track under it does not
+    change when a numerics setting changes the rail length.
+    """
     track = _track_system(scenario)
     speed = scenario.train.speed
     wheel_x0 = _wheel_start_positions(scenario)
@@ -297,8 +301,9 @@ def _build_model(scenario: Scenario, duration: float) -> _Model:
     return _Model(
         track=track, vehicle=_vehicle_system(scenario), wheel_x0=wheel_x0, speed=speed,
         hertz_constant=scenario.track.hertz_constant, prescribed_load=np.array([-1.0]),
-        eta_grid=np.ascontiguousarray(irregularity.profile_for(scenario.irregularity, grid),
-                                      dtype=float),
+        eta_grid=np.ascontiguousarray(
+            irregularity.profile_for(scenario.irregularity, grid - 0.5 * scenario.rail_length),
+            dtype=float),
         eta_start=float(start), eta_step=eta_step, monitored_block=track.n_spacings // 2)
 
 
