@@ -40,6 +40,7 @@ def _format_range(bounds, inclusive) -> str:
     right = "]" if inclusive[1] else ")"
     low_s = "-inf" if low is None else f"{low:g}"
     high_s = "inf" if high is None else f"{high:g}"
+    right = ")" if high is None else right
     return f"{left}{low_s}, {high_s}{right}"
 
 
@@ -48,6 +49,8 @@ class _RangeMessage:
 
     def _validate_bounds(self, val, bounds, inclusive_bounds):
         try:
+            if val is not None and not math.isfinite(val):
+                raise ValueError("not finite")
             super()._validate_bounds(val, bounds, inclusive_bounds)
         except ValueError:
             owner = self.owner if isinstance(self.owner, type) else type(self.owner)
@@ -59,7 +62,7 @@ class _RangeMessage:
 
 
 class Quantity(_RangeMessage, param.Number):
-    """A real physical quantity with bounds; NaN is always refused."""
+    """A real physical quantity with bounds; NaN and ±inf are always refused."""
 
 
 class Count(_RangeMessage, param.Integer):

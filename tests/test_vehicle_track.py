@@ -543,7 +543,7 @@ def test_rail_too_short_is_refused_where_it_enters():
     derived rail always honours the margin."""
     scenario = smooth_single_bogie()
     with pytest.raises(ValueError, match=r"rail_end_margin = 5.0 is outside the allowed range "
-                                         r"\[20, inf\]"):
+                                         r"\[20, inf\)"):
         scenario.numerics.rail_end_margin = 5.0
     span = scenario.train.axle_span + scenario.numerics.approach_distance
     assert 0.5 * scenario.rail_length - span >= 20.0
