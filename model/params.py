@@ -391,9 +391,10 @@ class Numerics(param.Parameterized):
                      "Welch segment length for the one-sided PSDs (frequency resolution 1/T); a "
                      "shorter record is analysed whole.",
                      (False, True))
-    max_depth = _q(35.0, (0, 500), (10.0, 60.0), "Deepest output depth (m)",
+    max_depth = _q(35.0, (11.0, 500), (11.0, 60.0), "Deepest output depth (m)",
                    "Depth below the invert down to which the displacement is reported "
-                   "(paper Fig. 11 and conclusions: 35 m).", (False, True))
+                   "(paper Fig. 11 and conclusions: 35 m); at least 11 m, the paper's "
+                   "comparison depth, which the summary always reports.")
     n_depths = Count(71, bounds=(2, 2000), softbounds=(11, 201), label="Output depths",
                      doc="Number of equally spaced depths from the invert to the deepest one.")
 

@@ -12,6 +12,7 @@ the invert under the monitored block, spread over one block spacing and summed o
 from __future__ import annotations
 
 import json
+import math
 import time
 from collections import OrderedDict
 from collections.abc import Callable
@@ -21,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from model.params import Scenario
-from model.settlement import SoilResponse, soil_response
+from model.settlement import TAIL_TRANSIT_TIMES, SoilResponse, soil_response
 from model.spectra import one_sided_psd
 from model.vehicle_track import VehicleTrackResult, simulate
 
@@ -239,7 +240,21 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
             f"train speed {speed:.1f} m/s is {speed / shear_speed:.0%} of the soil shear-wave "
             f"speed {shear_speed:.1f} m/s: moving-load effects, which the 2D plane-strain tunnel "
             "model ignores, become important")
-    record, segment = scenario.passage_duration, scenario.numerics.psd_segment
+    numerics, beta = scenario.numerics, scenario.track.winkler_beta
+    if numerics.approach_distance * beta < 4.0:
+        warnings.append(
+            f"numerics.approach_distance = {numerics.approach_distance:g} m is shorter than "
+            f"4/β = {4.0 / beta:.1f} m: the record starts and ends with the block still "
+            "loaded, which cuts the load history and lowers the soil response")
+    record = scenario.passage_duration
+    needed = record + TAIL_TRANSIT_TIMES * numerics.max_depth / scenario.soil.s_wave_speed
+    if numerics.zero_pad_factor * record < needed:
+        warnings.append(
+            f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "
+            f"record to less than the passage plus the wave-travel tail to "
+            f"{numerics.max_depth:g} m ({needed:.2f} s): the deep response is cut short; use "
+            f"at least {math.ceil(needed / record)}")
+    segment = numerics.psd_segment
     if record < segment:
         warnings.append(
             f"the passage lasts {record:.2f} s, less than numerics.psd_segment = {segment:g} s: "
