@@ -488,7 +488,13 @@ class Scenario(param.Parameterized):
 
     def update(self, values: dict[str, dict[str, Any]]) -> None:
         """Set parameters from ``{section: {parameter: value}}``; unknown names are refused."""
+        if not isinstance(values, dict):
+            raise ValueError(f"a scenario must be an object of sections, not "
+                             f"{type(values).__name__}")
         for section, section_values in values.items():
+            if section in SECTIONS and not isinstance(section_values, dict):
+                raise ValueError(f"section {section!r} must be an object of parameters, not "
+                                 f"{type(section_values).__name__}")
             if section not in SECTIONS:
                 raise KeyError(f"unknown section {section!r}; expected one of {SECTIONS}")
             obj = getattr(self, section)

@@ -470,7 +470,7 @@ def invert_load_coefficients(ring_radius: float, n_harmonics: int) -> np.ndarray
 
 
 def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stresses):
-    """Unpack the parameter objects and run the kernel; refuse a non-finite result."""
+    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
     a, mass, extensional, bending = _ring_constants(tunnel)
     shear, lame, density = _soil_constants(soil)
     fields = ring_soil_field_kernel(omega, radius, np.ascontiguousarray(cos_weight),
@@ -478,7 +478,7 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
                                     bending, shear, lame, density, with_stresses)
     for field in fields:
         if not np.all(np.isfinite(field)):
-            raise FloatingPointError("the ring–soil solution is not finite; check the inputs "
+            raise ValueError("the ring–soil solution is not finite; check the inputs "
                                      "(extreme frequency or parameters)")
     return fields
 

@@ -94,6 +94,16 @@ def test_unknown_names_are_refused():
         Scenario.preset("nope")
 
 
+@pytest.mark.parametrize(("text", "message"), [
+    ("[1]", "a scenario must be an object of sections, not list"),
+    ('{"train": 5}', "section 'train' must be an object of parameters, not int"),
+    ("{", "Expecting property name"),
+])
+def test_malformed_scenario_json_is_a_value_error(text, message):
+    with pytest.raises(ValueError, match=message):
+        Scenario.from_json(text)
+
+
 @pytest.mark.parametrize(("cls", "name", "p"), list(_bounded_parameters()))
 def test_every_bound_refuses_a_bad_value_with_a_clear_message(cls, name, p):
     low, high = p.bounds
