@@ -142,13 +142,13 @@ class Train(param.Parameterized):
 
     @classmethod
     def type_a(cls, **overrides) -> Train:
-        """Nanjing six-car Type A train (22 m cars, 15.7 m bogie centres, 2.4 m wheelbase)."""
-        return cls(**{"car_length": 22.0, "bogie_distance": 15.7, "wheelbase": 2.4, **overrides})
+        """Nanjing six-car Type A train (the defaults: 22 m cars, 15.7 m bogies, 2.4 m axles)."""
+        return cls(**overrides)
 
     @classmethod
     def type_b(cls, **overrides) -> Train:
-        """Six-car Type B train (19 m cars, 12.6 m bogie centres, 2.3 m wheelbase)."""
-        return cls(**{"car_length": 19.0, "bogie_distance": 12.6, "wheelbase": 2.3, **overrides})
+        """Six-car Type B train, geometry from the ``type_b`` preset (19 m, 12.6 m, 2.3 m)."""
+        return cls(**{**_load_presets()["type_b"]["values"]["train"], **overrides})
 
     @property
     def speed(self) -> float:
@@ -261,11 +261,6 @@ class Irregularity(param.Parameterized):
         None, allow_None=True, label="Measured profile CSV",
         doc="Path of a measured profile (columns x in m measured from the monitored block, η in "
             "m or mm); replaces the synthetic profile when set.")
-
-    @property
-    def roughness_cm2_rad_per_m(self) -> float:
-        """FRA roughness parameter A_v of the selected class (cm²·rad/m)."""
-        return FRA_ROUGHNESS_CM2_RAD_PER_M[self.track_class]
 
 
 class Tunnel(param.Parameterized):

@@ -17,6 +17,7 @@ import time
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -143,6 +144,10 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
 
     vehicle_track = {section: data[section]
                      for section in ("vehicle", "train", "track", "irregularity")}
+    profile_csv = scenario.irregularity.profile_csv
+    if profile_csv:  # an edited file must not be served from the cache
+        stat = Path(profile_csv).stat() if Path(profile_csv).is_file() else None
+        vehicle_track["profile_file"] = stat and [stat.st_mtime_ns, stat.st_size]
     vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
     load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
     soil = {"upstream": load, "tunnel": data["tunnel"], "soil": data["soil"],

@@ -545,7 +545,7 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
     track, train = scenario.track, scenario.train
     beta, modulus = track.winkler_beta, track.winkler_modulus
     x_mon = 0.5 * scenario.rail_length
-    x0 = x_mon - scenario.numerics.approach_distance - np.asarray(train.axle_offsets)
+    x0 = _wheel_start_positions(scenario)
     xi = np.abs(x0[:, None] + train.speed * np.asarray(t_s)[None, :] - x_mon) * beta
     rail = (scenario.vehicle.static_wheel_load * beta / (2.0 * modulus)
             * np.exp(-xi) * (np.cos(xi) + np.sin(xi))).sum(axis=0)

@@ -84,6 +84,16 @@ def test_cache_serves_exactly_the_stages_a_change_does_not_touch(cheap_scenario)
     assert cache.hits == {"vehicle_track": 4, "load": 3, "soil": 1}
 
 
+def test_an_edited_profile_file_is_not_served_from_the_cache(tmp_path):
+    path = tmp_path / "profile.csv"
+    path.write_text("x_m,eta_mm\n-200,0\n200,0\n")
+    scenario = Scenario.paper()
+    scenario.irregularity.profile_csv = str(path)
+    before = pipeline.stage_keys(scenario)["vehicle_track"]
+    path.write_text("x_m,eta_mm\n-200,0\n0,1\n200,0\n")
+    assert pipeline.stage_keys(scenario)["vehicle_track"] != before
+
+
 def test_cache_is_bounded():
     cache = StageCache(size=2)
     for key in "abc":
