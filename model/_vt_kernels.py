@@ -183,7 +183,7 @@ def accelerations(t, q, qd, qdd, s, sd, sdd, u, ud, udd,
         qdd[k] = acc
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)  # releases the GIL: a served dashboard stays responsive
 def advance(step_start, step_stop, dt, phi, psi,
             q, qd, qdd, qdd_prev, s, sd, sdd, sdd_prev, u, ud, udd, udd_prev,
             omega2, fold_index, fold_sign, block_gain, mode_amplitude, wavenumber_unit,

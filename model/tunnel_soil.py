@@ -227,7 +227,7 @@ def _bessel_ratios(z, n_max, out):
     return k0
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, nogil=True)
 def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, ring_mass,
                            ring_extensional, ring_bending, shear, lame, density,
                            with_stresses):
