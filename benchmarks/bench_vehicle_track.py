@@ -98,22 +98,24 @@ def passage_timings(repeats: int) -> None:
 def scaling(repeats: int, quick: bool) -> None:
     """Cost per step against cars (N_m and wheels grow) and rail length (N_m grows)."""
     rows = []
+
+    def measure(scenario: Scenario) -> None:
+        seconds, n_steps = integration_cost(scenario, repeats)
+        rows.append((scenario.rail_modes, scenario.train.n_wheels, seconds / n_steps))
+        print(f"  {scenario.train.n_cars:4d}  {scenario.train.n_wheels:6d}  "
+              f"{scenario.rail_length:8.1f}  {scenario.rail_modes:5d}  "
+              f"{seconds / n_steps * 1e6:7.2f}")
+
     print("  cars  wheels  rail (m)  modes  µs/step")
     for n_cars in ((1, 3, 6) if quick else (1, 2, 3, 4, 6, 8)):
         scenario = Scenario.paper()
         scenario.train.n_cars = n_cars
-        seconds, n_steps = integration_cost(scenario, repeats)
-        rows.append((scenario.rail_modes, scenario.train.n_wheels, seconds / n_steps))
-        print(f"  {n_cars:4d}  {scenario.train.n_wheels:6d}  {scenario.rail_length:8.1f}  "
-              f"{scenario.rail_modes:5d}  {seconds / n_steps * 1e6:7.2f}")
+        measure(scenario)
     print("  six cars, longer rail (end margin):")
     for margin in ((60.0, 180.0) if quick else (60.0, 120.0, 240.0, 480.0)):
         scenario = Scenario.paper()
         scenario.numerics.rail_end_margin = margin
-        seconds, n_steps = integration_cost(scenario, repeats)
-        rows.append((scenario.rail_modes, scenario.train.n_wheels, seconds / n_steps))
-        print(f"  {6:4d}  {24:6d}  {scenario.rail_length:8.1f}  {scenario.rail_modes:5d}  "
-              f"{seconds / n_steps * 1e6:7.2f}")
+        measure(scenario)
     modes, wheels, cost = (np.array(c, dtype=float) for c in zip(*rows, strict=True))
     design = np.column_stack([np.ones_like(modes), modes, modes * wheels])
     c0, c1, c2 = np.linalg.lstsq(design, cost, rcond=None)[0]

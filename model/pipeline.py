@@ -25,7 +25,7 @@ import numpy as np
 from model.params import Scenario
 from model.settlement import TAIL_TRANSIT_TIMES, SoilResponse, soil_response
 from model.spectra import one_sided_psd
-from model.vehicle_track import VehicleTrackResult, simulate
+from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
 N_RAILS = 2  # both rails load the same tunnel section (MODEL.md §6)
 
@@ -186,8 +186,6 @@ def run(scenario: Scenario, progress: Progress | None = None,
     SimulationError
         The explicit integration diverged (its message names the limit on ``numerics.dt``).
     """
-    from model.vehicle_track import check_inputs
-
     check_inputs(scenario)
     report = progress or (lambda stage, fraction: None)
     keys = stage_keys(scenario)

@@ -493,13 +493,18 @@ def _n_steps(scenario: Scenario) -> int:
     return nearest if abs(ratio - nearest) < 1e-6 * max(1.0, ratio) else math.ceil(ratio)
 
 
-def check_inputs(scenario: Scenario) -> None:
+def check_inputs(scenario: Scenario) -> float:
     """Refuse inputs the simulation cannot handle, before any computation.
 
     Calls ``scenario.validate()`` (which also refuses too few rail modes, N_m < L/(2L_s)), then
     checks the time step against :func:`stable_time_step` and the size of the output. Speed and
     rail end margin need no check here: their parameter bounds refuse a zero speed and a margin
     under 20 m, and ``Scenario.rail_length`` honours the margin by construction.
+
+    Returns
+    -------
+    float
+        The stability limit :func:`stable_time_step` (s), so callers need not compute it again.
 
     Raises
     ------
@@ -522,6 +527,7 @@ def check_inputs(scenario: Scenario) -> None:
             f"numerics.dt = {numerics.dt:g} s gives {_n_steps(scenario)} time steps for a "
             f"{scenario.passage_duration:.3g} s passage, {n_values:.3g} output values in all; "
             f"allowed up to {MAX_OUTPUT_VALUES:.3g}: raise the time step or the speed")
+    return limit
 
 
 def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
@@ -580,8 +586,7 @@ def simulate(scenario: Scenario,
     ValueError
         From :func:`check_inputs`.
     """
-    check_inputs(scenario)
-    stable_dt = stable_time_step(scenario)
+    stable_dt = check_inputs(scenario)
     dt = scenario.numerics.dt
     n_steps = _n_steps(scenario)
     model = _build_model(scenario, n_steps * dt)
