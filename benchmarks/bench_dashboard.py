@@ -39,10 +39,12 @@ from test_browser import (  # noqa: E402  (shared browser helpers)
 
 from model.pipeline import STAGES  # noqa: E402
 
-TARGETS_S = {"first page load (paper, warm Numba caches)": 10.0,
-             "soil change → soil plots updated (full train)": 1.5,
-             "speed change → all plots updated (single bogie)": 2.0,
-             "speed change → all plots updated (full train)": 6.0}
+TARGETS_S = {
+    "first page load (paper, warm Numba caches)": 10.0,
+    "soil change → soil plots updated (full train)": 1.5,
+    "speed change → all plots updated (single bogie)": 2.0,
+    "speed change → all plots updated (full train)": 6.0,
+}
 
 # Two animation frames: the browser has painted what the last model change drew.
 PAINTED_JS = "() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))"
@@ -50,8 +52,10 @@ PAINTED_JS = "() => new Promise(r => requestAnimationFrame(() => requestAnimatio
 
 def warm_numba_caches() -> None:
     """Compile (or load) every kernel once in a separate process, as a previous run would."""
-    code = ("from model.params import Scenario; from model.pipeline import run; "
-            "s = Scenario.preset('single_bogie'); s.numerics.n_depths = 11; run(s, cache=None)")
+    code = (
+        "from model.params import Scenario; from model.pipeline import run; "
+        "s = Scenario.preset('single_bogie'); s.numerics.n_depths = 11; run(s, cache=None)"
+    )
     subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True)
 
 
@@ -101,16 +105,19 @@ def main(argv: list[str] | None = None) -> int:
             page.goto(f"{url}?preset=paper")
             wait_for_plots(page)
             for i in range(args.repeat):
-                samples[names[1]].append(timed_change(
-                    page, "soil.youngs_modulus", f"{7e6 + 1e6 * i:g}", ("soil",)))
+                samples[names[1]].append(
+                    timed_change(page, "soil.youngs_modulus", f"{7e6 + 1e6 * i:g}", ("soil",))
+                )
             for i in range(args.repeat):
-                samples[names[3]].append(timed_change(
-                    page, "train.speed_kmh", f"{70 + 2 * i}", STAGES))
+                samples[names[3]].append(
+                    timed_change(page, "train.speed_kmh", f"{70 + 2 * i}", STAGES)
+                )
             page.goto(f"{url}?preset=single_bogie")
             wait_for_plots(page)
             for i in range(args.repeat):
-                samples[names[2]].append(timed_change(
-                    page, "train.speed_kmh", f"{70 + 2 * i}", STAGES))
+                samples[names[2]].append(
+                    timed_change(page, "train.speed_kmh", f"{70 + 2 * i}", STAGES)
+                )
         browser.close()
 
     print(f"{'measurement':<50} {'best':>7} {'all samples (s)':<24} target")

@@ -41,14 +41,20 @@ def main() -> None:
     # Same points, made non-uniform by a 1 µm shift of one point: forces the direct path.
     scattered = uniform.copy()
     scattered[1] += 1e-6
-    print(f"grid: {uniform.size} points ({GRID_LENGTH_M:g} m at {GRID_STEP_M * 1e3:g} mm), "
-          f"{N_COMPONENTS} components")
+    print(
+        f"grid: {uniform.size} points ({GRID_LENGTH_M:g} m at {GRID_STEP_M * 1e3:g} mm), "
+        f"{N_COMPONENTS} components"
+    )
     first, best = time_calls(uniform, REPEATS)
-    print(f"uniform grid (phasor rotation): first call {first:.3f} s, "
-          f"best of {REPEATS} warm {best * 1e3:.1f} ms")
+    print(
+        f"uniform grid (phasor rotation): first call {first:.3f} s, "
+        f"best of {REPEATS} warm {best * 1e3:.1f} ms"
+    )
     first, best = time_calls(scattered, 2)
-    print(f"arbitrary points (direct cosines): first call {first:.3f} s, best of 2 warm "
-          f"{best * 1e3:.0f} ms")
+    print(
+        f"arbitrary points (direct cosines): first call {first:.3f} s, best of 2 warm "
+        f"{best * 1e3:.0f} ms"
+    )
 
 
 if __name__ == "__main__":

@@ -35,10 +35,10 @@ def best_of(make_change, preset: str) -> tuple[float, dict[str, float]]:
 def main() -> None:
     run(Scenario.preset("single_bogie"), cache=None)  # load the Numba caches
     cases = {
-        "soil modulus change (soil stage only)":
-            lambda s, i: setattr(s.soil, "youngs_modulus", 7e6 + i * 1e5),
-        "speed change (every stage)":
-            lambda s, i: setattr(s.train, "speed_kmh", 70.0 + i),
+        "soil modulus change (soil stage only)": lambda s, i: setattr(
+            s.soil, "youngs_modulus", 7e6 + i * 1e5
+        ),
+        "speed change (every stage)": lambda s, i: setattr(s.train, "speed_kmh", 70.0 + i),
     }
     for preset in ("single_bogie", "paper"):
         for label, change in cases.items():

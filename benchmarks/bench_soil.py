@@ -51,8 +51,10 @@ def main() -> None:
     freq = np.linspace(100.0 / 4096, 100.0, 4096)
     depth = np.linspace(0.0, 35.0, 50)
     first, best = best_of(lambda: invert_receptance(freq, depth, tunnel, soil, 64), REPEATS)
-    print(f"invert_receptance 64 harmonics x 4096 frequencies x 50 depths: first {first:.3f} s, "
-          f"best of {REPEATS} {best:.3f} s (target 1 s)")
+    print(
+        f"invert_receptance 64 harmonics x 4096 frequencies x 50 depths: first {first:.3f} s, "
+        f"best of {REPEATS} {best:.3f} s (target 1 s)"
+    )
 
     scenario = Scenario.paper()
     dt, _, load, *_ = synthetic_train_load(scenario)
@@ -63,11 +65,14 @@ def main() -> None:
         result = soil_response(load, dt, scenario.tunnel, scenario.soil, scenario.numerics)
 
     first, best = best_of(soil_stage, REPEATS)
-    print(f"soil_response, paper preset, {load.size} samples ({load.size * dt:.2f} s at "
-          f"{dt:g} s): first {first:.3f} s, best of {REPEATS} {best:.3f} s (target 1 s)")
+    print(
+        f"soil_response, paper preset, {load.size} samples ({load.size * dt:.2f} s at "
+        f"{dt:g} s): first {first:.3f} s, best of {REPEATS} {best:.3f} s (target 1 s)"
+    )
     rows = [int(np.argmin(np.abs(result.depth_m - d))) for d in (0.0, 11.0, 35.0)]
-    peaks = ", ".join(f"{result.depth_m[r]:g} m: {1e3 * result.peak_disp_m[r]:.2f} mm"
-                      for r in rows)
+    peaks = ", ".join(
+        f"{result.depth_m[r]:g} m: {1e3 * result.peak_disp_m[r]:.2f} mm" for r in rows
+    )
     print(f"  synthetic load peak {load.max() / 1e3:.1f} kN/m; peak downward displacement {peaks}")
 
 

@@ -65,11 +65,19 @@ def cold_start() -> None:
     with tempfile.TemporaryDirectory() as cache_dir:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir, "PYTHONPATH": str(ROOT)}
         for label in ("empty Numba cache (compile)", "filled Numba cache (load)"):
-            out = subprocess.run([sys.executable, "-c", COLD_SCRIPT], env=env, cwd=ROOT,
-                                 capture_output=True, text=True, check=True).stdout.split()
+            out = subprocess.run(
+                [sys.executable, "-c", COLD_SCRIPT],
+                env=env,
+                cwd=ROOT,
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout.split()
             imports, first, warm = (float(v) for v in out)
-            print(f"  {label}: imports {imports:.2f} s, first single-bogie run {first:.2f} s "
-                  f"(warm run {warm * 1e3:.0f} ms, so ~{first - warm:.2f} s of JIT)")
+            print(
+                f"  {label}: imports {imports:.2f} s, first single-bogie run {first:.2f} s "
+                f"(warm run {warm * 1e3:.0f} ms, so ~{first - warm:.2f} s of JIT)"
+            )
 
 
 def integration_cost(scenario: Scenario, repeats: int) -> tuple[float, int]:
@@ -77,8 +85,7 @@ def integration_cost(scenario: Scenario, repeats: int) -> tuple[float, int]:
     dt = scenario.numerics.dt
     n_steps = vt._n_steps(scenario)
     model = vt._build_model(scenario, n_steps * dt)
-    seconds = best_of(lambda: vt._integrate(model, vt._initial_state(model), n_steps, dt),
-                      repeats)
+    seconds = best_of(lambda: vt._integrate(model, vt._initial_state(model), n_steps, dt), repeats)
     return seconds, n_steps
 
 
@@ -89,10 +96,12 @@ def passage_timings(repeats: int) -> None:
         vt.simulate(scenario)
         total = best_of(lambda s=scenario: vt.simulate(s), repeats)
         stepping, n_steps = integration_cost(scenario, repeats)
-        print(f"  {label}: {scenario.rail_length:g} m rail, {scenario.rail_modes} modes, "
-              f"{scenario.train.n_wheels} wheels, {n_steps} steps: simulate() {total:.3f} s; "
-              f"time stepping {stepping:.3f} s = {n_steps / stepping / 1e3:.0f} k steps/s, "
-              f"{stepping / n_steps * 1e6:.2f} µs/step")
+        print(
+            f"  {label}: {scenario.rail_length:g} m rail, {scenario.rail_modes} modes, "
+            f"{scenario.train.n_wheels} wheels, {n_steps} steps: simulate() {total:.3f} s; "
+            f"time stepping {stepping:.3f} s = {n_steps / stepping / 1e3:.0f} k steps/s, "
+            f"{stepping / n_steps * 1e6:.2f} µs/step"
+        )
 
 
 def scaling(repeats: int, quick: bool) -> None:
@@ -102,25 +111,29 @@ def scaling(repeats: int, quick: bool) -> None:
     def measure(scenario: Scenario) -> None:
         seconds, n_steps = integration_cost(scenario, repeats)
         rows.append((scenario.rail_modes, scenario.train.n_wheels, seconds / n_steps))
-        print(f"  {scenario.train.n_cars:4d}  {scenario.train.n_wheels:6d}  "
-              f"{scenario.rail_length:8.1f}  {scenario.rail_modes:5d}  "
-              f"{seconds / n_steps * 1e6:7.2f}")
+        print(
+            f"  {scenario.train.n_cars:4d}  {scenario.train.n_wheels:6d}  "
+            f"{scenario.rail_length:8.1f}  {scenario.rail_modes:5d}  "
+            f"{seconds / n_steps * 1e6:7.2f}"
+        )
 
     print("  cars  wheels  rail (m)  modes  µs/step")
-    for n_cars in ((1, 3, 6) if quick else (1, 2, 3, 4, 6, 8)):
+    for n_cars in (1, 3, 6) if quick else (1, 2, 3, 4, 6, 8):
         scenario = Scenario.paper()
         scenario.train.n_cars = n_cars
         measure(scenario)
     print("  six cars, longer rail (end margin):")
-    for margin in ((60.0, 180.0) if quick else (60.0, 120.0, 240.0, 480.0)):
+    for margin in (60.0, 180.0) if quick else (60.0, 120.0, 240.0, 480.0):
         scenario = Scenario.paper()
         scenario.numerics.rail_end_margin = margin
         measure(scenario)
     modes, wheels, cost = (np.array(c, dtype=float) for c in zip(*rows, strict=True))
     design = np.column_stack([np.ones_like(modes), modes, modes * wheels])
     c0, c1, c2 = np.linalg.lstsq(design, cost, rcond=None)[0]
-    print(f"  fit: cost/step ≈ {c0 * 1e6:.2f} µs + {c1 * 1e9:.2f} ns·N_m "
-          f"+ {c2 * 1e9:.3f} ns·N_m·n_wheels")
+    print(
+        f"  fit: cost/step ≈ {c0 * 1e6:.2f} µs + {c1 * 1e9:.2f} ns·N_m "
+        f"+ {c2 * 1e9:.3f} ns·N_m·n_wheels"
+    )
 
 
 @numba.njit(cache=True)
@@ -138,8 +151,8 @@ def _dst_coupling(reps, q, force):
     """The same two products as DST-I through rocket-fft (scipy.fft inside Numba)."""
     modal = np.zeros(q.size)
     for _ in range(reps):
-        rail = scipy.fft.dst(q[:force.size], 1)
-        modal[:force.size] = scipy.fft.dst(force + 1e-12 * rail, 1)
+        rail = scipy.fft.dst(q[: force.size], 1)
+        modal[: force.size] = scipy.fft.dst(force + 1e-12 * rail, 1)
     return modal
 
 
@@ -160,13 +173,15 @@ def coupling_alternatives(repeats: int) -> None:
     rng = np.random.default_rng(1)
     x = 0.6 * np.arange(1, n_blocks + 1)
     shapes = np.sin(np.outer(np.arange(1, n_modes + 1), x) * np.pi / 316.8)
-    q, qd, s, sd, force = (rng.standard_normal(n) for n in (n_modes, n_modes, n_blocks,
-                                                            n_blocks, n_blocks))
+    q, qd, s, sd, force = (
+        rng.standard_normal(n) for n in (n_modes, n_modes, n_blocks, n_blocks, n_blocks)
+    )
     cases = {
         "dense mode-shape matrices (BLAS gemv)": lambda: _dense_coupling(reps, shapes, q, force),
         "DST-I via rocket-fft (scipy.fft in Numba)": lambda: _dst_coupling(reps, q, force),
         "diagonal block-modal form (this model)": lambda: _diagonal_coupling(
-            reps, q, qd, s, sd, 8e7, 5e4, 0.16, force),
+            reps, q, qd, s, sd, 8e7, 5e4, 0.16, force
+        ),
     }
     for label, call in cases.items():
         call()

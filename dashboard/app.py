@@ -43,9 +43,15 @@ log = logging.getLogger(__name__)
 PRIMARY = ("train.speed_kmh", "soil.youngs_modulus", "track.fastener_stiffness")
 """Controls shown up front; every other parameter sits in its section's collapsible group."""
 
-GROUP_TITLES = {"train": "Train", "irregularity": "Track irregularity", "track": "Track",
-                "soil": "Soil", "tunnel": "Lining", "vehicle": "Vehicle",
-                "numerics": "Numerics"}
+GROUP_TITLES = {
+    "train": "Train",
+    "irregularity": "Track irregularity",
+    "track": "Track",
+    "soil": "Soil",
+    "tunnel": "Lining",
+    "vehicle": "Vehicle",
+    "numerics": "Numerics",
+}
 """Collapsible groups in display order: section → title."""
 
 HIDDEN = {"irregularity.profile_csv"}
@@ -96,8 +102,13 @@ def parameter_widget(scenario: Scenario, path: str) -> pn.widgets.Widget:
         value = "" if value is None else str(value)
     if "description" in cls.param:  # sliders and checkboxes have no tooltip
         kwargs["description"] = p.doc
-    return cls(label=p.label, value=value, sizing_mode="stretch_width",
-               css_classes=[f"param-{section}-{name}"], **kwargs)
+    return cls(
+        label=p.label,
+        value=value,
+        sizing_mode="stretch_width",
+        css_classes=[f"param-{section}-{name}"],
+        **kwargs,
+    )
 
 
 def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
@@ -118,8 +129,10 @@ def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
 
 def _dynamic(draw):
     """DynamicMap callback drawing the Results a Pipe stream carries."""
+
     def callback(data):
         return draw(data)
+
     return callback
 
 
@@ -161,8 +174,13 @@ class Dashboard(pn.viewable.Viewer):
 
     threaded = param.Boolean(default=False, doc="Run the pipeline in a worker thread.")
 
-    def __init__(self, scenario: Scenario | None = None, preset: str = DEFAULT_PRESET,
-                 cache: StageCache = DEFAULT_CACHE, **params):
+    def __init__(
+        self,
+        scenario: Scenario | None = None,
+        preset: str = DEFAULT_PRESET,
+        cache: StageCache = DEFAULT_CACHE,
+        **params,
+    ):
         super().__init__(**params)
         self.scenario = scenario if scenario is not None else Scenario.preset(preset)
         self.cache = cache
@@ -185,53 +203,87 @@ class Dashboard(pn.viewable.Viewer):
 
         descriptions = _preset_descriptions()
         self.preset_select = pn.widgets.Select(
-            label="Preset", options=list(descriptions), value=preset,
+            label="Preset",
+            options=list(descriptions),
+            value=preset,
             description="Named scenario; choosing one replaces every input.",
-            sizing_mode="stretch_width")
+            sizing_mode="stretch_width",
+        )
         self.preset_select.param.watch(self._on_preset, "value")
         self._preset_descriptions = descriptions
-        self.preset_note = pn.pane.HTML(_note_html(descriptions.get(preset, "")),
-                                        margin=(0, 10), sizing_mode="stretch_width")
+        self.preset_note = pn.pane.HTML(
+            _note_html(descriptions.get(preset, "")), margin=(0, 10), sizing_mode="stretch_width"
+        )
         self.train_type = pn.widgets.Select(
-            label="Train type", options=[*TRAIN_TYPES, CUSTOM], value=self._train_type(),
+            label="Train type",
+            options=[*TRAIN_TYPES, CUSTOM],
+            value=self._train_type(),
             description="Car length, bogie-centre distance and wheelbase of a standard "
-                        "Chinese metro car.", sizing_mode="stretch_width")
+            "Chinese metro car.",
+            sizing_mode="stretch_width",
+        )
         self.train_type.param.watch(self._on_train_type, "value")
 
-        self.error_alert = pn.pane.Alert("", alert_type="danger", visible=False,
-                                         css_classes=["error-alert"],
-                                         sizing_mode="stretch_width")
-        self.warning_alert = pn.pane.Alert("", alert_type="warning", visible=False,
-                                           css_classes=["warning-alert"],
-                                           sizing_mode="stretch_width")
-        self.progress = pn.indicators.Progress(value=0, max=100, active=False, visible=False,
-                                               sizing_mode="stretch_width",
-                                               css_classes=["run-progress"])
+        self.error_alert = pn.pane.Alert(
+            "",
+            alert_type="danger",
+            visible=False,
+            css_classes=["error-alert"],
+            sizing_mode="stretch_width",
+        )
+        self.warning_alert = pn.pane.Alert(
+            "",
+            alert_type="warning",
+            visible=False,
+            css_classes=["warning-alert"],
+            sizing_mode="stretch_width",
+        )
+        self.progress = pn.indicators.Progress(
+            value=0,
+            max=100,
+            active=False,
+            visible=False,
+            sizing_mode="stretch_width",
+            css_classes=["run-progress"],
+        )
         self.status = pn.pane.HTML("", css_classes=["run-status"], sizing_mode="stretch_width")
-        self.summary = pn.pane.HTML("", css_classes=["summary-pane"], stylesheets=[ITEMS_CSS],
-                                    sizing_mode="stretch_width")
-        self.soil_summary = pn.pane.HTML("", css_classes=["soil-pane"],
-                                         stylesheets=[ITEMS_CSS], sizing_mode="stretch_width")
+        self.summary = pn.pane.HTML(
+            "", css_classes=["summary-pane"], stylesheets=[ITEMS_CSS], sizing_mode="stretch_width"
+        )
+        self.soil_summary = pn.pane.HTML(
+            "", css_classes=["soil-pane"], stylesheets=[ITEMS_CSS], sizing_mode="stretch_width"
+        )
         self.plot_streams: dict[str, Pipe] = {}
         """Per plot, the stream holding the Results it shows (sent only when its stage changed)."""
         self.plot_panes = {
-            spec.key: pn.pane.HoloViews(None, sizing_mode="stretch_width", loading=True,
-                                        min_height=plots.PLOT_HEIGHT,
-                                        css_classes=["plot", f"plot-{spec.key}",
-                                                     f"stage-{spec.stage}"])
+            spec.key: pn.pane.HoloViews(
+                None,
+                sizing_mode="stretch_width",
+                loading=True,
+                min_height=plots.PLOT_HEIGHT,
+                css_classes=["plot", f"plot-{spec.key}", f"stage-{spec.stage}"],
+            )
             for spec in plots.PLOTS
         }
 
         self.save_button = pn.widgets.FileDownload(
-            callback=self._scenario_file, filename="scenario.json", label="Save scenario",
-            sizing_mode="stretch_width")
-        self.load_input = pn.widgets.FileInput(accept=".json", multiple=False,
-                                               sizing_mode="stretch_width")
+            callback=self._scenario_file,
+            filename="scenario.json",
+            label="Save scenario",
+            sizing_mode="stretch_width",
+        )
+        self.load_input = pn.widgets.FileInput(
+            accept=".json", multiple=False, sizing_mode="stretch_width"
+        )
         self.load_input.param.watch(self._on_load, "value")
         self.report_button = pn.widgets.FileDownload(
-            callback=self._report_file, filename="tunnelsettle_report.html",
-            label="Download HTML report", disabled=True,
-            sizing_mode="stretch_width", css_classes=["report-button"])
+            callback=self._report_file,
+            filename="tunnelsettle_report.html",
+            label="Download HTML report",
+            disabled=True,
+            sizing_mode="stretch_width",
+            css_classes=["report-button"],
+        )
         self._update_soil_summary()
 
     # ---- construction from a browser session ----------------------------------------------
@@ -266,35 +318,64 @@ class Dashboard(pn.viewable.Viewer):
         """Sidebar contents: preset, primary controls, collapsible groups, files."""
         groups = []
         for section, title in GROUP_TITLES.items():
-            members = [widget for path, widget in self.widgets.items()
-                       if path.startswith(f"{section}.") and path not in PRIMARY]
+            members = [
+                widget
+                for path, widget in self.widgets.items()
+                if path.startswith(f"{section}.") and path not in PRIMARY
+            ]
             if section == "train":
                 members.insert(0, self.train_type)
             groups.append(_lazy_card(members, title=title, css_classes=[f"group-{section}"]))
-        files = pn.Card(self.save_button, pn.pane.Markdown("Load a scenario file:", margin=(0, 5)),
-                        self.load_input, title="Scenario file", collapsed=True,
-                        sizing_mode="stretch_width")
-        return [self.preset_select, self.preset_note, *[self.widgets[path] for path in PRIMARY],
-                *groups, files, self.report_button]
+        files = pn.Card(
+            self.save_button,
+            pn.pane.Markdown("Load a scenario file:", margin=(0, 5)),
+            self.load_input,
+            title="Scenario file",
+            collapsed=True,
+            sizing_mode="stretch_width",
+        )
+        return [
+            self.preset_select,
+            self.preset_note,
+            *[self.widgets[path] for path in PRIMARY],
+            *groups,
+            files,
+            self.report_button,
+        ]
 
     def main(self) -> list[pn.viewable.Viewable]:
         """Main-area contents: run status, messages, key numbers, plots."""
         plots_grid = pn.GridBox(*self.plot_panes.values(), ncols=2, sizing_mode="stretch_width")
-        return [pn.Column(self.progress, self.status, self.error_alert, self.warning_alert,
-                          self.summary, self.soil_summary, plots_grid,
-                          sizing_mode="stretch_width")]
+        return [
+            pn.Column(
+                self.progress,
+                self.status,
+                self.error_alert,
+                self.warning_alert,
+                self.summary,
+                self.soil_summary,
+                plots_grid,
+                sizing_mode="stretch_width",
+            )
+        ]
 
     def __panel__(self) -> pn.viewable.Viewable:
-        return pn.Row(pn.Column(*self.sidebar(), width=340), pn.Column(*self.main()),
-                      sizing_mode="stretch_width")
+        return pn.Row(
+            pn.Column(*self.sidebar(), width=340),
+            pn.Column(*self.main()),
+            sizing_mode="stretch_width",
+        )
 
     def template(self) -> pn.template.BootstrapTemplate:
         """The served page: controls in the sidebar, results in the main area."""
         # Bootstrap rather than Fast: the Fast design fetches a web font from the internet.
         return pn.template.BootstrapTemplate(
             title="tunnelsettle — metro tunnel settlement under passing trains",
-            sidebar=self.sidebar(), main=self.main(), sidebar_width=380,
-            header_background="#1f6f8b")
+            sidebar=self.sidebar(),
+            main=self.main(),
+            sidebar_width=380,
+            header_background="#1f6f8b",
+        )
 
     # ---- editing ----------------------------------------------------------------------------
     def _on_edit(self, path: str, event: param.parameterized.Event) -> None:
@@ -429,7 +510,8 @@ class Dashboard(pn.viewable.Viewer):
                 scenario = self.scenario.copy()
                 self._start(scenario)
                 future = loop.run_in_executor(
-                    _EXECUTOR, partial(self._compute, scenario, self._note_progress))
+                    _EXECUTOR, partial(self._compute, scenario, self._note_progress)
+                )
                 while not future.done():
                     await asyncio.wait([future], timeout=POLL_S)
                     self._show_progress()
@@ -463,8 +545,9 @@ class Dashboard(pn.viewable.Viewer):
         if stage:
             overall = (STAGES.index(stage) + fraction) / len(STAGES)
             self.progress.value = round(100 * overall)
-            self.status.object = (f'<span class="computing">Computing '
-                                  f'{STAGE_NAMES[stage]}… {fraction:.0%}</span>')
+            self.status.object = (
+                f'<span class="computing">Computing {STAGE_NAMES[stage]}… {fraction:.0%}</span>'
+            )
 
     def _compute(self, scenario: Scenario, progress) -> Results | Exception:
         """Run the pipeline; a failure is returned (to be shown), not raised."""
@@ -480,13 +563,19 @@ class Dashboard(pn.viewable.Viewer):
         """Show a run's results (redrawing only the plots whose stage changed) or its error."""
         self.progress.param.update(visible=False, active=False)
         if isinstance(outcome, Exception):
-            headline = ("Inconsistent inputs:" if isinstance(outcome, ScenarioError)
-                        else "The computation failed:")
+            headline = (
+                "Inconsistent inputs:"
+                if isinstance(outcome, ScenarioError)
+                else "The computation failed:"
+            )
             self._show_error(headline, [_error_text(outcome)])
             for pane in self.plot_panes.values():
                 pane.loading = False
-            self.status.object = ('<span class="failed">Last run failed; the plots show the '
-                                  'previous results.</span>' if self.results else "")
+            self.status.object = (
+                '<span class="failed">Last run failed; the plots show the previous results.</span>'
+                if self.results
+                else ""
+            )
             return
         results = outcome
         redrawn = self._stale_stages(results.scenario)
@@ -508,9 +597,10 @@ class Dashboard(pn.viewable.Viewer):
         self.results = results
         self.summary.object = items_html(plots.summary_items(results), "summary")
         self.warning_alert.param.update(
-            object="**Warnings**\n\n" + "\n".join(f"- {_markdown_escape(w)}"
-                                                  for w in results.warnings),
-            visible=bool(results.warnings))
+            object="**Warnings**\n\n"
+            + "\n".join(f"- {_markdown_escape(w)}" for w in results.warnings),
+            visible=bool(results.warnings),
+        )
         self.status.object = self._status_html(results)
         self.report_button.disabled = False
 
@@ -518,11 +608,16 @@ class Dashboard(pn.viewable.Viewer):
         """Which stages re-ran and how long they took; render counters for the browser tests."""
         parts = []
         for stage in STAGES:
-            took = ("cached" if stage in results.cached_stages
-                    else f"{results.stage_seconds.get(stage, 0.0):.2f} s")
-            parts.append(f'<span class="stage-status" data-stage="{stage}" '
-                         f'data-renders="{self.render_counts[stage]}">'
-                         f"{STAGE_NAMES[stage]}: {took}</span>")
+            took = (
+                "cached"
+                if stage in results.cached_stages
+                else f"{results.stage_seconds.get(stage, 0.0):.2f} s"
+            )
+            parts.append(
+                f'<span class="stage-status" data-stage="{stage}" '
+                f'data-renders="{self.render_counts[stage]}">'
+                f"{STAGE_NAMES[stage]}: {took}</span>"
+            )
         return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
 
     # ---- files ------------------------------------------------------------------------------

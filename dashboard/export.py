@@ -35,7 +35,8 @@ def items_html(items: list[plots.SummaryItem], css_class: str) -> str:
     cells = "".join(
         f'<div class="item"><div class="label">{html.escape(item.label)}</div>'
         f'<div class="value" data-key="{item.key}">{html.escape(item.text)}</div></div>'
-        for item in items)
+        for item in items
+    )
     return f'<div class="{css_class}">{cells}</div>'
 
 
@@ -52,24 +53,37 @@ def build_report(results: Results) -> pn.Column:
     """Panel layout of the report: summary, warnings, every plot and the full scenario JSON."""
     scenario = results.scenario
     warnings = "".join(f"<li>{html.escape(w)}</li>" for w in results.warnings)
-    warning_block = (f'<div class="warnings"><h3>Warnings</h3><ul>{warnings}</ul></div>'
-                     if warnings else "")
+    warning_block = (
+        f'<div class="warnings"><h3>Warnings</h3><ul>{warnings}</ul></div>' if warnings else ""
+    )
     header = pn.pane.HTML(
         f"<h1>{REPORT_TITLE}</h1>"
         "<p>Train → track → tunnel → soil: peak dynamic displacement below a metro tunnel in "
         "soft soil. Displacements are positive downward.</p>"
-        "<h3>Key numbers</h3>" + items_html(plots.summary_items(results), "summary")
-        + "<h3>Derived soil quantities</h3>" + items_html(plots.soil_items(scenario.soil), "soil")
+        "<h3>Key numbers</h3>"
+        + items_html(plots.summary_items(results), "summary")
+        + "<h3>Derived soil quantities</h3>"
+        + items_html(plots.soil_items(scenario.soil), "soil")
         + warning_block,
-        stylesheets=[ITEMS_CSS], sizing_mode="stretch_width")
+        stylesheets=[ITEMS_CSS],
+        sizing_mode="stretch_width",
+    )
     figures = pn.GridBox(
-        *[pn.pane.HoloViews(spec.draw(results), sizing_mode="stretch_width",
-                            css_classes=[f"plot-{spec.key}"]) for spec in plots.PLOTS],
-        ncols=2, sizing_mode="stretch_width")
+        *[
+            pn.pane.HoloViews(
+                spec.draw(results), sizing_mode="stretch_width", css_classes=[f"plot-{spec.key}"]
+            )
+            for spec in plots.PLOTS
+        ],
+        ncols=2,
+        sizing_mode="stretch_width",
+    )
     scenario_block = pn.pane.HTML(
         "<h3>Scenario</h3><details open><summary>All inputs (JSON, SI units except "
-        f"km/h)</summary><pre class=\"scenario-json\">{html.escape(results.scenario_json)}"
-        "</pre></details>", sizing_mode="stretch_width")
+        f'km/h)</summary><pre class="scenario-json">{html.escape(results.scenario_json)}'
+        "</pre></details>",
+        sizing_mode="stretch_width",
+    )
     return pn.Column(header, figures, scenario_block, sizing_mode="stretch_width")
 
 
@@ -96,8 +110,13 @@ def report_html(results: Results) -> str:
         if sheets:
             model.stylesheets = [_packaged_stylesheet(sheet) for sheet in sheets]
     buffer = io.StringIO()
-    pn.io.save.save(document, buffer, title=REPORT_TITLE, resources=INLINE,
-                    template_variables=_OFFLINE_TEMPLATE_VARIABLES)
+    pn.io.save.save(
+        document,
+        buffer,
+        title=REPORT_TITLE,
+        resources=INLINE,
+        template_variables=_OFFLINE_TEMPLATE_VARIABLES,
+    )
     return buffer.getvalue()
 
 
@@ -112,7 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``python -m dashboard.export``."""
     parser = argparse.ArgumentParser(
         prog="python -m dashboard.export",
-        description="Run a scenario and write a self-contained HTML report.")
+        description="Run a scenario and write a self-contained HTML report.",
+    )
     add_scenario_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="HTML file to write")
     return parser

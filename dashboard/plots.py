@@ -31,8 +31,14 @@ PLOT_HEIGHT = 300  # px
 # Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
 # falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
 # framewise: in the dashboard the same plot is updated with new data; its axes must follow.
-_COMMON = {"responsive": True, "height": PLOT_HEIGHT, "tools": ["hover"], "show_grid": True,
-           "framewise": True, "backend_opts": {"plot.output_backend": "canvas"}}
+_COMMON = {
+    "responsive": True,
+    "height": PLOT_HEIGHT,
+    "tools": ["hover"],
+    "show_grid": True,
+    "framewise": True,
+    "backend_opts": {"plot.output_backend": "canvas"},
+}
 
 
 @dataclass(frozen=True)
@@ -44,8 +50,9 @@ class PlotSpec:
     draw: Callable[[Results], hv.Element]
 
 
-def decimate_min_max(x: np.ndarray, y: np.ndarray,
-                     max_points: int = MAX_DISPLAY_POINTS) -> tuple[np.ndarray, np.ndarray]:
+def decimate_min_max(
+    x: np.ndarray, y: np.ndarray, max_points: int = MAX_DISPLAY_POINTS
+) -> tuple[np.ndarray, np.ndarray]:
     """Thin a sampled curve for display, keeping each bin's minimum and maximum in time order.
 
     Parameters
@@ -70,16 +77,18 @@ def decimate_min_max(x: np.ndarray, y: np.ndarray,
     offsets = np.arange(n_bins) * bin_size
     lows = offsets + np.argmin(padded, axis=1)
     highs = offsets + np.argmax(padded, axis=1)
-    keep = np.unique(np.concatenate(([0, n - 1], np.minimum(lows, n - 1),
-                                     np.minimum(highs, n - 1))))
+    keep = np.unique(
+        np.concatenate(([0, n - 1], np.minimum(lows, n - 1), np.minimum(highs, n - 1)))
+    )
     return x[keep], y[keep]
 
 
 def _time_curve(t_s, values, label, value_dim, scale):
     """Decimated time-history curve with a labelled value dimension."""
     t, v = decimate_min_max(np.asarray(t_s), np.asarray(values) * scale)
-    return hv.Curve((t, v), kdims=[hv.Dimension("t", label="Time", unit="s")],
-                    vdims=[value_dim], label=label)
+    return hv.Curve(
+        (t, v), kdims=[hv.Dimension("t", label="Time", unit="s")], vdims=[value_dim], label=label
+    )
 
 
 def block_displacement_plot(results: Results) -> hv.Overlay:
@@ -88,16 +97,17 @@ def block_displacement_plot(results: Results) -> hv.Overlay:
     disp = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
     simulated = _time_curve(vt.t_s, vt.block_disp_m, "Vehicle–track model", disp, MM)
     winkler = _time_curve(vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", disp, MM)
-    return (simulated.opts(line_width=1.5)
-            * winkler.opts(line_dash="dashed", line_width=1.5)).opts(
-        title="Sleeper (block) displacement", legend_position="top_right", **_COMMON)
+    return (simulated.opts(line_width=1.5) * winkler.opts(line_dash="dashed", line_width=1.5)).opts(
+        title="Sleeper (block) displacement", legend_position="top_right", **_COMMON
+    )
 
 
 def invert_load_plot(results: Results) -> hv.Curve:
     """Force into the tunnel invert under the monitored block against time."""
     force = hv.Dimension("block_force", label="Force into the invert per block", unit="kN")
-    curve = _time_curve(results.vehicle_track.t_s, results.vehicle_track.block_force_N,
-                        "Invert load", force, KN)
+    curve = _time_curve(
+        results.vehicle_track.t_s, results.vehicle_track.block_force_N, "Invert load", force, KN
+    )
     return curve.opts(title="Invert load", **_COMMON)
 
 
@@ -106,9 +116,12 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
     f = np.asarray(f_hz)
     p = np.asarray(psd) * scale
     keep = (f > 0) & (f <= max_frequency_hz) & (p > 0)
-    return hv.Curve((f[keep], p[keep]),
-                    kdims=[hv.Dimension("f", label="Frequency", unit="Hz")],
-                    vdims=[value_dim], label=label)
+    return hv.Curve(
+        (f[keep], p[keep]),
+        kdims=[hv.Dimension("f", label="Frequency", unit="Hz")],
+        vdims=[value_dim],
+        label=label,
+    )
 
 
 def load_psd_plot(results: Results) -> hv.Curve:
@@ -123,8 +136,9 @@ def interface_psd_plot(results: Results) -> hv.Curve:
     """One-sided PSD of the displacement at the ring–soil interface under the invert."""
     dim = hv.Dimension("interface_psd", label="PSD", unit="mm²/Hz")
     top = results.scenario.numerics.soil_max_frequency
-    curve = _psd_curve(results.soil.f_hz, results.soil.interface_psd, dim, MM**2,
-                       "Ring–soil interface", top)
+    curve = _psd_curve(
+        results.soil.f_hz, results.soil.interface_psd, dim, MM**2, "Ring–soil interface", top
+    )
     return curve.opts(title="Interface displacement PSD", logy=True, **_COMMON)
 
 
@@ -140,16 +154,27 @@ def depth_profile_plot(results: Results, reference: list[dict] | None = None) ->
     depth = hv.Dimension("depth", label="Depth below the invert", unit="m")
     peak = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
     soil = results.soil
-    layers = [hv.Curve((soil.peak_disp_m * MM, soil.depth_m), kdims=[peak], vdims=[depth],
-                       label="This model").opts(line_width=2)]
+    layers = [
+        hv.Curve(
+            (soil.peak_disp_m * MM, soil.depth_m), kdims=[peak], vdims=[depth], label="This model"
+        ).opts(line_width=2)
+    ]
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):
-        points = hv.Scatter((np.asarray(series["peak_disp_m"]) * MM, series["depth_m"]),
-                            kdims=[peak], vdims=[depth], label=series["label"])
+        points = hv.Scatter(
+            (np.asarray(series["peak_disp_m"]) * MM, series["depth_m"]),
+            kdims=[peak],
+            vdims=[depth],
+            label=series["label"],
+        )
         layers.append(points.opts(marker=marker, size=10))
-    return hv.Overlay(layers).opts(title="Peak dynamic displacement against depth",
-                                   invert_yaxis=True, legend_position="bottom_right",
-                                   padding=0.05, **_COMMON)
+    return hv.Overlay(layers).opts(
+        title="Peak dynamic displacement against depth",
+        invert_yaxis=True,
+        legend_position="bottom_right",
+        padding=0.05,
+        **_COMMON,
+    )
 
 
 PLOTS = (
@@ -182,20 +207,34 @@ def summary_items(results: Results) -> list[SummaryItem]:
     s = results.summary()
     deepest = s["deepest_depth_m"]
     return [
-        SummaryItem("peak_invert_force", "Peak invert load (one block)",
-                    s["peak_invert_force_N"] * KN, "kN"),
-        SummaryItem("peak_line_load", "Peak line load on the section",
-                    s["peak_line_load_N_per_m"] * KN, "kN/m"),
-        SummaryItem("peak_block_disp", "Peak sleeper displacement",
-                    s["peak_block_disp_m"] * MM, "mm"),
-        SummaryItem("peak_disp_invert", "Peak dynamic displacement at the invert",
-                    s["peak_disp_invert_m"] * MM, "mm"),
-        SummaryItem("peak_disp_11m", "… 11 m below the invert", s["peak_disp_11m_m"] * MM,
-                    "mm"),
-        SummaryItem("peak_disp_deepest", f"… {deepest:g} m below the invert",
-                    s["peak_disp_deepest_m"] * MM, "mm"),
-        SummaryItem("min_wheel_force", "Lowest wheel–rail force", s["min_wheel_force_N"] * KN,
-                    "kN"),
+        SummaryItem(
+            "peak_invert_force", "Peak invert load (one block)", s["peak_invert_force_N"] * KN, "kN"
+        ),
+        SummaryItem(
+            "peak_line_load",
+            "Peak line load on the section",
+            s["peak_line_load_N_per_m"] * KN,
+            "kN/m",
+        ),
+        SummaryItem(
+            "peak_block_disp", "Peak sleeper displacement", s["peak_block_disp_m"] * MM, "mm"
+        ),
+        SummaryItem(
+            "peak_disp_invert",
+            "Peak dynamic displacement at the invert",
+            s["peak_disp_invert_m"] * MM,
+            "mm",
+        ),
+        SummaryItem("peak_disp_11m", "… 11 m below the invert", s["peak_disp_11m_m"] * MM, "mm"),
+        SummaryItem(
+            "peak_disp_deepest",
+            f"… {deepest:g} m below the invert",
+            s["peak_disp_deepest_m"] * MM,
+            "mm",
+        ),
+        SummaryItem(
+            "min_wheel_force", "Lowest wheel–rail force", s["min_wheel_force_N"] * KN, "kN"
+        ),
     ]
 
 

@@ -60,8 +60,10 @@ def row(*cells) -> str:
 def main() -> None:
     bogie = run(Scenario.preset("single_bogie"), cache=None)
     train = run(Scenario.paper(), cache=None)
-    readings = {name: run(Scenario.preset(name), cache=None)
-                for name in ("paper_soil_wave_speeds", "paper_soil_lame")}
+    readings = {
+        name: run(Scenario.preset(name), cache=None)
+        for name in ("paper_soil_wave_speeds", "paper_soil_lame")
+    }
 
     vt = bogie.vehicle_track
     model_peak, boef_peak = vt.block_disp_m.max(), vt.winkler_block_disp_m.max()
@@ -74,8 +76,9 @@ def main() -> None:
     peaks = spectral_peaks(train.soil.f_hz, train.soil.interface_psd, 20.0, 6)
     s = train.summary()
     track = Scenario.paper().track
-    winkler_share = track.winkler_beta * track.block_spacing / 2 * Scenario.paper(
-        ).vehicle.static_wheel_load
+    winkler_share = (
+        track.winkler_beta * track.block_spacing / 2 * Scenario.paper().vehicle.static_wheel_load
+    )
     depth, peak = train.soil.depth_m, train.soil.peak_disp_m
     at = {d: float(np.interp(d, depth, peak)) * MM for d in (0.0, 11.0, 35.0)}
 
@@ -92,58 +95,107 @@ def main() -> None:
         "",
         row("quantity", "this project", "paper", "ratio", "why they differ"),
         row("---", "---", "---", "---", "---"),
-        row("Fig. 5: peak block (sleeper) displacement, single bogie",
-            f"{model_peak * MM:.3f} mm", "not stated", "–",
+        row(
+            "Fig. 5: peak block (sleeper) displacement, single bogie",
+            f"{model_peak * MM:.3f} mm",
+            "not stated",
+            "–",
             f"The Winkler (BOEF) curve of the same track gives {boef_peak * MM:.3f} mm "
             f"(ratio {model_peak / boef_peak:.2f}); the paper's Table 2 track values are "
-            "missing, ours are MODEL.md's assumptions."),
-        row("Fig. 5: duration above 10 % of the peak, model vs BOEF",
-            f"{model_width * 1e3:.1f} ms vs {boef_width * 1e3:.1f} ms", "model decays slower",
+            "missing, ours are MODEL.md's assumptions.",
+        ),
+        row(
+            "Fig. 5: duration above 10 % of the peak, model vs BOEF",
+            f"{model_width * 1e3:.1f} ms vs {boef_width * 1e3:.1f} ms",
+            "model decays slower",
             f"{model_width / boef_width:.3f}",
             f"Same sense as the paper, but small here: 10 m from the wheel the model's block "
             f"is still {model_far * 1e6:.2f} µm down, the BOEF's {boef_far * 1e6:.3f} µm. With "
             "MODEL.md's stiff supports the two nearly coincide; the paper's larger gap may "
-            "come from its unknown track values or mode count."),
-        row("Fig. 6: peak force into the invert under one block, full train",
-            f"{s['peak_invert_force_N'] / 1e3:.1f} kN", "not stated", "–",
+            "come from its unknown track values or mode count.",
+        ),
+        row(
+            "Fig. 6: peak force into the invert under one block, full train",
+            f"{s['peak_invert_force_N'] / 1e3:.1f} kN",
+            "not stated",
+            "–",
             f"The Winkler share βL_s/2 of one 61.1 kN wheel is {winkler_share / 1e3:.1f} kN; "
             "the paper gives no number. Line load q = 2F_b/L_s peaks at "
-            f"{s['peak_line_load_N_per_m'] / 1e3:.1f} kN/m."),
-        row("Fig. 7: share of load variance below 30 Hz, single bogie",
-            f"{bogie_fraction:.2%} ({1 - bogie_fraction:.1e} above)", "main content 0–30 Hz",
-            "–", f"Agrees. Full train: {1 - train_fraction:.1e} above 30 Hz. Pads and "
+            f"{s['peak_line_load_N_per_m'] / 1e3:.1f} kN/m.",
+        ),
+        row(
+            "Fig. 7: share of load variance below 30 Hz, single bogie",
+            f"{bogie_fraction:.2%} ({1 - bogie_fraction:.1e} above)",
+            "main content 0–30 Hz",
+            "–",
+            f"Agrees. Full train: {1 - train_fraction:.1e} above 30 Hz. Pads and "
             "fasteners filter the "
-            "high-frequency wheel–rail force, as the paper says."),
+            "high-frequency wheel–rail force, as the paper says.",
+        ),
         "",
         "## Tunnel–soil stage (paper §4.2)",
         "",
         row("quantity", "this project", "paper", "ratio", "why they differ"),
         row("---", "---", "---", "---", "---"),
-        row("Fig. 10: interface-displacement PSD peaks below 20 Hz",
-            ", ".join(f"{f:.2f}" for f in peaks) + " Hz", "≈ 2, 3, 4 and 10–12 Hz", "–",
-            peak_match_text(peaks) + " See the note below."),
-        row("Fig. 11: peak displacement at the invert", f"{at[0.0]:.2f} mm", "6.72 mm",
-            f"{at[0.0] / 6.72:.2f}", "See the note below."),
-        row("Fig. 11: peak displacement at 11 m", f"{at[11.0]:.2f} mm", "2.94 mm",
-            f"{at[11.0] / 2.94:.2f}", "See the note below."),
-        row("Conclusions: peak displacement at the invert", f"{at[0.0]:.2f} mm", "7.27 mm",
-            f"{at[0.0] / 7.27:.2f}", "The paper's two invert values disagree with each other."),
-        row("Conclusions: peak displacement at 35 m", f"{at[35.0]:.2f} mm", "0.91 mm",
-            f"{at[35.0] / 0.91:.2f}", "See the note below."),
+        row(
+            "Fig. 10: interface-displacement PSD peaks below 20 Hz",
+            ", ".join(f"{f:.2f}" for f in peaks) + " Hz",
+            "≈ 2, 3, 4 and 10–12 Hz",
+            "–",
+            peak_match_text(peaks) + " See the note below.",
+        ),
+        row(
+            "Fig. 11: peak displacement at the invert",
+            f"{at[0.0]:.2f} mm",
+            "6.72 mm",
+            f"{at[0.0] / 6.72:.2f}",
+            "See the note below.",
+        ),
+        row(
+            "Fig. 11: peak displacement at 11 m",
+            f"{at[11.0]:.2f} mm",
+            "2.94 mm",
+            f"{at[11.0] / 2.94:.2f}",
+            "See the note below.",
+        ),
+        row(
+            "Conclusions: peak displacement at the invert",
+            f"{at[0.0]:.2f} mm",
+            "7.27 mm",
+            f"{at[0.0] / 7.27:.2f}",
+            "The paper's two invert values disagree with each other.",
+        ),
+        row(
+            "Conclusions: peak displacement at 35 m",
+            f"{at[35.0]:.2f} mm",
+            "0.91 mm",
+            f"{at[35.0] / 0.91:.2f}",
+            "See the note below.",
+        ),
         "",
         "### The other readings of the paper's Table 4",
         "",
         row("soil reading", "E (MPa)", "ν", "c2 (m/s)", "invert (mm)", "11 m (mm)", "35 m (mm)"),
         row("---", "---", "---", "---", "---", "---", "---"),
     ]
-    for name, result in (("E = 6 MPa, ν = 0.3 (default)", train),
-                         ("c1 = 524, c2 = 190 m/s", readings["paper_soil_wave_speeds"]),
-                         ("λ = 1.4 GPa, μ = 191 MPa", readings["paper_soil_lame"])):
+    for name, result in (
+        ("E = 6 MPa, ν = 0.3 (default)", train),
+        ("c1 = 524, c2 = 190 m/s", readings["paper_soil_wave_speeds"]),
+        ("λ = 1.4 GPa, μ = 191 MPa", readings["paper_soil_lame"]),
+    ):
         soil = result.scenario.soil
         d, p = result.soil.depth_m, result.soil.peak_disp_m
-        lines.append(row(name, f"{soil.youngs_modulus / 1e6:.1f}", f"{soil.poisson_ratio:.3f}",
-                         f"{soil.s_wave_speed:.1f}", f"{p[0] * MM:.3f}",
-                         f"{np.interp(11.0, d, p) * MM:.3f}", f"{p[-1] * MM:.3f}"))
+        lines.append(
+            row(
+                name,
+                f"{soil.youngs_modulus / 1e6:.1f}",
+                f"{soil.poisson_ratio:.3f}",
+                f"{soil.s_wave_speed:.1f}",
+                f"{p[0] * MM:.3f}",
+                f"{np.interp(11.0, d, p) * MM:.3f}",
+                f"{p[-1] * MM:.3f}",
+            )
+        )
     lines += ["", NOTES.strip(), ""]
     OUT.write_text("\n".join(lines), encoding="utf-8")
     print(f"wrote {OUT}")

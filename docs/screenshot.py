@@ -19,8 +19,11 @@ OUT = ROOT / "assets" / "dashboard.png"
 
 
 def main() -> None:
-    with tempfile.TemporaryDirectory() as tmp, serve_app(Path(tmp) / "server.log") as url, \
-            sync_playwright() as playwright:
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        serve_app(Path(tmp) / "server.log") as url,
+        sync_playwright() as playwright,
+    ):
         browser = launch_chromium(playwright)
         page = browser.new_page(viewport={"width": 1400, "height": 1300})
         page.goto(f"{url}?preset=paper")

@@ -24,19 +24,29 @@ PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     """Add ``--preset`` / ``--scenario`` and the repeatable ``--set`` (read by load_scenario)."""
     source = parser.add_mutually_exclusive_group()
-    source.add_argument("--preset", default="paper", choices=Scenario.preset_names(),
-                        help="named scenario from assets/presets.json (default: paper)")
+    source.add_argument(
+        "--preset",
+        default="paper",
+        choices=Scenario.preset_names(),
+        help="named scenario from assets/presets.json (default: paper)",
+    )
     source.add_argument("--scenario", type=Path, help="scenario JSON file written by a run")
-    parser.add_argument("--set", dest="overrides", action="append", default=[],
-                        metavar="SECTION.PARAM=VALUE",
-                        help="override one parameter, e.g. train.speed_kmh=60 (repeatable)")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="SECTION.PARAM=VALUE",
+        help="override one parameter, e.g. train.speed_kmh=60 (repeatable)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``python -m model``."""
     parser = argparse.ArgumentParser(
         prog="python -m model",
-        description="Run the vehicle–track–tunnel–soil model and write its results.")
+        description="Run the vehicle–track–tunnel–soil model and write its results.",
+    )
     add_scenario_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
@@ -45,8 +55,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def load_scenario(args: argparse.Namespace) -> Scenario:
     """Scenario from the preset or file, with the ``--set`` overrides applied."""
-    scenario = (Scenario.from_json(args.scenario.read_text(encoding="utf-8"))
-                if args.scenario else Scenario.preset(args.preset))
+    scenario = (
+        Scenario.from_json(args.scenario.read_text(encoding="utf-8"))
+        if args.scenario
+        else Scenario.preset(args.preset)
+    )
     for item in args.overrides:
         path, sep, value = item.partition("=")
         if not sep:
@@ -107,14 +120,23 @@ def write_results(results: Results, out: Path) -> list[Path]:
     written = []
     for name, columns in tables.items():
         path = out / name
-        np.savetxt(path, np.column_stack(list(columns.values())), delimiter=",",
-                   header=",".join(columns), comments="", fmt="%.9g")
+        np.savetxt(
+            path,
+            np.column_stack(list(columns.values())),
+            delimiter=",",
+            header=",".join(columns),
+            comments="",
+            fmt="%.9g",
+        )
         written.append(path)
     scenario_path = out / "scenario.json"
     scenario_path.write_text(results.scenario_json + "\n", encoding="utf-8")
     summary_path = out / "summary.json"
-    summary = {"summary": results.summary(), "warnings": results.warnings,
-               "stage_seconds": results.stage_seconds}
+    summary = {
+        "summary": results.summary(),
+        "warnings": results.warnings,
+        "stage_seconds": results.stage_seconds,
+    }
     summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     return [*written, scenario_path, summary_path]
 
@@ -139,10 +161,12 @@ def main(argv: list[str] | None = None) -> int:
         for warning in results.warnings:
             print(f"warning: {warning}", file=sys.stderr)
         summary = results.summary()
-        print(f"peak invert force {summary['peak_invert_force_N'] / 1e3:.1f} kN, "
-              f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
-              f"at 11 m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
-              f"{len(paths)} files in {args.out}")
+        print(
+            f"peak invert force {summary['peak_invert_force_N'] / 1e3:.1f} kN, "
+            f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
+            f"at 11 m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
+            f"{len(paths)} files in {args.out}"
+        )
     return 0
 
 

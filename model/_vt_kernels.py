@@ -59,8 +59,9 @@ def profile_at(eta_grid, grid_start, grid_step, x):
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def vehicle_accelerations(u, ud, udd, inv_mass, stiffness, damping, gravity_force, wheel_dof,
-                          wheel_force):
+def vehicle_accelerations(
+    u, ud, udd, inv_mass, stiffness, damping, gravity_force, wheel_dof, wheel_force
+):
     """Vehicle: M ü = f_g − K u − C u̇ − (contact forces on the wheelsets), car by car."""
     n_cars, n_dof = inv_mass.shape
     wheels_per_car = wheel_dof.shape[1]
@@ -78,14 +79,50 @@ def vehicle_accelerations(u, ud, udd, inv_mass, stiffness, damping, gravity_forc
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def accelerations(t, q, qd, qdd, s, sd, sdd, u, ud, udd,
-                  omega2, fold_index, fold_sign, block_gain, mode_amplitude, wavenumber_unit,
-                  fastener_k, fastener_c, pad_k, pad_c, block_mass,
-                  inv_mass, stiffness, damping, gravity_force, wheel_dof,
-                  wheel_x0, speed, hertz_constant, prescribed_load,
-                  eta_grid, eta_start, eta_step,
-                  sine_table, wheel_work, rail_at_wheel, fold_disp, fold_vel, block_mode_force,
-                  wheel_x, compression, wheel_force):
+def accelerations(
+    t,
+    q,
+    qd,
+    qdd,
+    s,
+    sd,
+    sdd,
+    u,
+    ud,
+    udd,
+    omega2,
+    fold_index,
+    fold_sign,
+    block_gain,
+    mode_amplitude,
+    wavenumber_unit,
+    fastener_k,
+    fastener_c,
+    pad_k,
+    pad_c,
+    block_mass,
+    inv_mass,
+    stiffness,
+    damping,
+    gravity_force,
+    wheel_dof,
+    wheel_x0,
+    speed,
+    hertz_constant,
+    prescribed_load,
+    eta_grid,
+    eta_start,
+    eta_step,
+    sine_table,
+    wheel_work,
+    rail_at_wheel,
+    fold_disp,
+    fold_vel,
+    block_mode_force,
+    wheel_x,
+    compression,
+    wheel_force,
+):
     """Accelerations qdd, sdd, udd of the whole system at time t; wheel forces as a by-product.
 
     ``prescribed_load`` (n_wheels,) replaces the Hertz law when its first entry is ≥ 0: the
@@ -150,8 +187,9 @@ def accelerations(t, q, qd, qdd, s, sd, sdd, u, ud, udd,
             eta = profile_at(eta_grid, eta_start, eta_step, wheel_x[j])
             compression[j] = u[dof] - rail_at_wheel[j] - eta
             wheel_force[j] = hertz_force(compression[j], hertz_constant)
-        vehicle_accelerations(u, ud, udd, inv_mass, stiffness, damping, gravity_force,
-                              wheel_dof, wheel_force)
+        vehicle_accelerations(
+            u, ud, udd, inv_mass, stiffness, damping, gravity_force, wheel_dof, wheel_force
+        )
 
     # Track: rail modes k < N meet block mode k directly (ρ = k, σ = +1); higher modes fold
     n_block_modes = s.size
@@ -168,8 +206,9 @@ def accelerations(t, q, qd, qdd, s, sd, sdd, u, ud, udd,
             fold_disp[r] += fold_sign[k] * q[k]
             fold_vel[r] += fold_sign[k] * qd[k]
     for r in range(n_block_modes):
-        force = (fastener_k * (block_gain * fold_disp[r] - s[r])
-                 + fastener_c * (block_gain * fold_vel[r] - sd[r]))
+        force = fastener_k * (block_gain * fold_disp[r] - s[r]) + fastener_c * (
+            block_gain * fold_vel[r] - sd[r]
+        )
         block_mode_force[r] = force
         sdd[r] = (force - pad_k * s[r] - pad_c * sd[r]) / block_mass
     for k in range(n_modes):
@@ -184,16 +223,62 @@ def accelerations(t, q, qd, qdd, s, sd, sdd, u, ud, udd,
 
 
 @numba.njit(cache=True, nogil=True)  # releases the GIL: a served dashboard stays responsive
-def advance(step_start, step_stop, dt, phi, psi,
-            q, qd, qdd, qdd_prev, s, sd, sdd, sdd_prev, u, ud, udd, udd_prev,
-            omega2, fold_index, fold_sign, block_gain, mode_amplitude, wavenumber_unit,
-            fastener_k, fastener_c, pad_k, pad_c, block_mass,
-            inv_mass, stiffness, damping, gravity_force, wheel_dof, body_dof,
-            wheel_x0, speed, hertz_constant, prescribed_load,
-            eta_grid, eta_start, eta_step,
-            monitor_block_weight, monitor_rail_weight, divergence_limit,
-            in_contact, open_event, events, event_count,
-            block_force, block_disp, rail_disp, wheel_force_out, wheel_acc_out, body_acc_out):
+def advance(
+    step_start,
+    step_stop,
+    dt,
+    phi,
+    psi,
+    q,
+    qd,
+    qdd,
+    qdd_prev,
+    s,
+    sd,
+    sdd,
+    sdd_prev,
+    u,
+    ud,
+    udd,
+    udd_prev,
+    omega2,
+    fold_index,
+    fold_sign,
+    block_gain,
+    mode_amplitude,
+    wavenumber_unit,
+    fastener_k,
+    fastener_c,
+    pad_k,
+    pad_c,
+    block_mass,
+    inv_mass,
+    stiffness,
+    damping,
+    gravity_force,
+    wheel_dof,
+    body_dof,
+    wheel_x0,
+    speed,
+    hertz_constant,
+    prescribed_load,
+    eta_grid,
+    eta_start,
+    eta_step,
+    monitor_block_weight,
+    monitor_rail_weight,
+    divergence_limit,
+    in_contact,
+    open_event,
+    events,
+    event_count,
+    block_force,
+    block_disp,
+    rail_disp,
+    wheel_force_out,
+    wheel_acc_out,
+    body_acc_out,
+):
     """Advance the system from step ``step_start`` to ``step_stop`` with Zhai's method.
 
     Step n takes the state at t_n = n·dt to t_{n+1} and writes outputs at index n + 1 (index 0
@@ -231,17 +316,71 @@ def advance(step_start, step_stop, dt, phi, psi,
         zhai_predict(u, ud, udd, udd_prev, dt, step_phi, step_psi)
         out = step + 1
         t = out * dt
-        accelerations(t, q, qd, qdd, s, sd, sdd, u, ud, udd,
-                      omega2, fold_index, fold_sign, block_gain, mode_amplitude,
-                      wavenumber_unit, fastener_k, fastener_c, pad_k, pad_c, block_mass,
-                      inv_mass, stiffness, damping, gravity_force, wheel_dof,
-                      wheel_x0, speed, hertz_constant, prescribed_load,
-                      eta_grid, eta_start, eta_step,
-                      sine_table, wheel_work, rail_at_wheel, fold_disp, fold_vel, block_mode_force,
-                      wheel_x, compression, wheel_force)
-        record(out, q, s, sd, udd, n_dof, wheel_dof, body_dof, pad_k, pad_c,
-               monitor_block_weight, monitor_rail_weight, wheel_force,
-               block_force, block_disp, rail_disp, wheel_force_out, wheel_acc_out, body_acc_out)
+        accelerations(
+            t,
+            q,
+            qd,
+            qdd,
+            s,
+            sd,
+            sdd,
+            u,
+            ud,
+            udd,
+            omega2,
+            fold_index,
+            fold_sign,
+            block_gain,
+            mode_amplitude,
+            wavenumber_unit,
+            fastener_k,
+            fastener_c,
+            pad_k,
+            pad_c,
+            block_mass,
+            inv_mass,
+            stiffness,
+            damping,
+            gravity_force,
+            wheel_dof,
+            wheel_x0,
+            speed,
+            hertz_constant,
+            prescribed_load,
+            eta_grid,
+            eta_start,
+            eta_step,
+            sine_table,
+            wheel_work,
+            rail_at_wheel,
+            fold_disp,
+            fold_vel,
+            block_mode_force,
+            wheel_x,
+            compression,
+            wheel_force,
+        )
+        record(
+            out,
+            q,
+            s,
+            sd,
+            udd,
+            n_dof,
+            wheel_dof,
+            body_dof,
+            pad_k,
+            pad_c,
+            monitor_block_weight,
+            monitor_rail_weight,
+            wheel_force,
+            block_force,
+            block_disp,
+            rail_disp,
+            wheel_force_out,
+            wheel_acc_out,
+            body_acc_out,
+        )
 
         for j in range(n_wheels):
             delta = compression[j]
@@ -270,9 +409,27 @@ def advance(step_start, step_stop, dt, phi, psi,
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def record(out, q, s, sd, udd, n_dof, wheel_dof, body_dof, pad_k, pad_c,
-           monitor_block_weight, monitor_rail_weight, wheel_force,
-           block_force, block_disp, rail_disp, wheel_force_out, wheel_acc_out, body_acc_out):
+def record(
+    out,
+    q,
+    s,
+    sd,
+    udd,
+    n_dof,
+    wheel_dof,
+    body_dof,
+    pad_k,
+    pad_c,
+    monitor_block_weight,
+    monitor_rail_weight,
+    wheel_force,
+    block_force,
+    block_disp,
+    rail_disp,
+    wheel_force_out,
+    wheel_acc_out,
+    body_acc_out,
+):
     """Write the monitored quantities of the current state at output index ``out``."""
     z_block = 0.0
     v_block = 0.0

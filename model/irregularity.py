@@ -33,10 +33,15 @@ _ETA_UNITS_TO_M = {"eta_m": 1.0, "eta_mm": 1e-3}
 
 def _check_track_class(track_class) -> int:
     """Return ``track_class`` as an int, or raise naming the allowed classes."""
-    if isinstance(track_class, bool) or not isinstance(track_class, int | np.integer) or (
-            int(track_class) not in FRA_ROUGHNESS_CM2_RAD_PER_M):
-        raise ValueError(f"track_class = {track_class!r} is not an FRA track class; allowed: "
-                         f"integers 1–6 (6 is the best track)")
+    if (
+        isinstance(track_class, bool)
+        or not isinstance(track_class, int | np.integer)
+        or (int(track_class) not in FRA_ROUGHNESS_CM2_RAD_PER_M)
+    ):
+        raise ValueError(
+            f"track_class = {track_class!r} is not an FRA track class; allowed: "
+            f"integers 1–6 (6 is the best track)"
+        )
     return int(track_class)
 
 
@@ -62,8 +67,9 @@ def fra_psd(wavenumber_rad_per_m, track_class: int) -> np.ndarray:
     omega = np.asarray(wavenumber_rad_per_m, dtype=float)
     if not np.all(np.isfinite(omega)) or np.any(omega <= 0.0):
         bad = omega[~(np.isfinite(omega) & (omega > 0.0))].ravel()[0]
-        raise ValueError(f"wavenumber_rad_per_m = {bad!r} is outside the allowed range "
-                         f"(0, inf) rad/m")
+        raise ValueError(
+            f"wavenumber_rad_per_m = {bad!r} is outside the allowed range (0, inf) rad/m"
+        )
     omega_c2 = FRA_CUTOFF_WAVENUMBER**2
     psd_cm2 = FRA_SCALE_FACTOR * amplitude * omega_c2 / (omega**2 * (omega**2 + omega_c2))
     return psd_cm2 * CM2_TO_M2
@@ -89,16 +95,27 @@ def series_wavenumbers(wavelength_band_m: tuple[float, float], n_components: int
     try:
         wavelength_min, wavelength_max = (float(v) for v in wavelength_band_m)
     except (TypeError, ValueError):
-        raise ValueError(f"wavelength_band_m = {wavelength_band_m!r} must be a pair "
-                         f"(shortest, longest) of wavelengths in m") from None
-    if not (math.isfinite(wavelength_min) and math.isfinite(wavelength_max)
-            and 0.0 < wavelength_min < wavelength_max):
-        raise ValueError(f"wavelength_band_m = {wavelength_band_m!r} must satisfy "
-                         f"0 < shortest < longest < inf (m)")
-    if isinstance(n_components, bool) or not isinstance(n_components, int | np.integer) or (
-            n_components < 1):
-        raise ValueError(f"n_components = {n_components!r} is outside the allowed range: "
-                         f"integers >= 1")
+        raise ValueError(
+            f"wavelength_band_m = {wavelength_band_m!r} must be a pair "
+            f"(shortest, longest) of wavelengths in m"
+        ) from None
+    if not (
+        math.isfinite(wavelength_min)
+        and math.isfinite(wavelength_max)
+        and 0.0 < wavelength_min < wavelength_max
+    ):
+        raise ValueError(
+            f"wavelength_band_m = {wavelength_band_m!r} must satisfy "
+            f"0 < shortest < longest < inf (m)"
+        )
+    if (
+        isinstance(n_components, bool)
+        or not isinstance(n_components, int | np.integer)
+        or (n_components < 1)
+    ):
+        raise ValueError(
+            f"n_components = {n_components!r} is outside the allowed range: integers >= 1"
+        )
     omega_min = 2.0 * math.pi / wavelength_max
     omega_max = 2.0 * math.pi / wavelength_min
     spacing = (omega_max - omega_min) / n_components
@@ -106,8 +123,9 @@ def series_wavenumbers(wavelength_band_m: tuple[float, float], n_components: int
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _series_on_uniform_grid(x_start, x_step, n_points, amplitudes, wavenumbers, phases,
-                            reanchor_points):
+def _series_on_uniform_grid(
+    x_start, x_step, n_points, amplitudes, wavenumbers, phases, reanchor_points
+):
     """Σ_k a_k cos(Ω_k x + φ_k) at x = x_start + j·x_step by phasor rotation along the grid."""
     n_comp = amplitudes.size
     out = np.empty(n_points)
@@ -157,9 +175,13 @@ def _uniform_step(x: np.ndarray) -> float | None:
     return step
 
 
-def synthesize_profile(x_m, track_class: int, seed: int,
-                       wavelength_band_m: tuple[float, float] = (1.0, 50.0),
-                       n_components: int = 2000) -> np.ndarray:
+def synthesize_profile(
+    x_m,
+    track_class: int,
+    seed: int,
+    wavelength_band_m: tuple[float, float] = (1.0, 50.0),
+    n_components: int = 2000,
+) -> np.ndarray:
     """Random vertical profile η(x) with the FRA PSD, by trigonometric series.
 
     η(x) = Σ_k sqrt(2 S(Ω_k) ΔΩ) cos(Ω_k x + φ_k), Ω_k the midpoints of ``n_components`` equal
@@ -202,8 +224,9 @@ def synthesize_profile(x_m, track_class: int, seed: int,
     step = _uniform_step(x)
     if step is None:
         return _series_at_points(x, amplitudes, wavenumbers, phases)
-    return _series_on_uniform_grid(x[0], step, x.size, amplitudes, wavenumbers, phases,
-                                   _REANCHOR_POINTS)
+    return _series_on_uniform_grid(
+        x[0], step, x.size, amplitudes, wavenumbers, phases, _REANCHOR_POINTS
+    )
 
 
 def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
@@ -248,8 +271,9 @@ def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
             to_m = _ETA_UNITS_TO_M[fields[1]]
             continue
         if len(fields) != 2:
-            raise ValueError(f"{where}: expected 2 comma-separated values, found {len(fields)} "
-                             f"in {line!r}")
+            raise ValueError(
+                f"{where}: expected 2 comma-separated values, found {len(fields)} in {line!r}"
+            )
         try:
             x, eta = float(fields[0]), float(fields[1])
         except ValueError:
@@ -257,8 +281,10 @@ def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
         if not (math.isfinite(x) and math.isfinite(eta)):
             raise ValueError(f"{where}: {line!r} contains a non-finite value")
         if x_values and x <= x_values[-1]:
-            raise ValueError(f"{where}: x = {x!r} m does not exceed the previous x = "
-                             f"{x_values[-1]!r} m; x must be strictly increasing")
+            raise ValueError(
+                f"{where}: x = {x!r} m does not exceed the previous x = "
+                f"{x_values[-1]!r} m; x must be strictly increasing"
+            )
         x_values.append(x)
         eta_values.append(eta * to_m)
     if to_m is None:
@@ -303,8 +329,13 @@ def profile_for(irregularity: Irregularity, x_m) -> np.ndarray:
             raise ValueError(
                 f"x_m spans [{x.min():g}, {x.max():g}] m but the measured profile "
                 f"{irregularity.profile_csv} covers only [{x_measured[0]:g}, "
-                f"{x_measured[-1]:g}] m")
+                f"{x_measured[-1]:g}] m"
+            )
         return np.interp(x, x_measured, eta_measured)
     return synthesize_profile(
-        x, irregularity.track_class, irregularity.seed,
-        (irregularity.wavelength_min, irregularity.wavelength_max), irregularity.n_components)
+        x,
+        irregularity.track_class,
+        irregularity.seed,
+        (irregularity.wavelength_min, irregularity.wavelength_max),
+        irregularity.n_components,
+    )

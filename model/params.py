@@ -87,30 +87,78 @@ class Vehicle(param.Parameterized):
     The one-rail model halves every mass and inertia; suspension values are per side.
     """
 
-    car_body_mass = _q(38500.0, (0, None), (20000.0, 60000.0), "Car body mass (kg)",
-                       "Mass of one car body, M_c (paper Table 1).", (False, True))
+    car_body_mass = _q(
+        38500.0,
+        (0, None),
+        (20000.0, 60000.0),
+        "Car body mass (kg)",
+        "Mass of one car body, M_c (paper Table 1).",
+        (False, True),
+    )
     car_body_pitch_inertia = _q(
-        None, (0, None), (5e5, 3e6), "Car body pitch inertia (kg·m²)",
+        None,
+        (0, None),
+        (5e5, 3e6),
+        "Car body pitch inertia (kg·m²)",
         "Pitch inertia of one car body. The paper does not give it; None means M_c·L_car²/12 "
-        "(uniform slender body, MODEL.md §1).", (False, True), allow_none=True)
-    bogie_mass = _q(2980.0, (0, None), (1500.0, 5000.0), "Bogie frame mass (kg)",
-                    "Mass of one bogie frame, M_t (paper Table 1).", (False, True))
-    bogie_pitch_inertia = _q(3605.0, (0, None), (1000.0, 8000.0), "Bogie pitch inertia (kg·m²)",
-                             "Pitch inertia of one bogie frame, J_t (paper Table 1).",
-                             (False, True))
-    wheelset_mass = _q(1350.0, (0, None), (800.0, 2500.0), "Wheelset mass (kg)",
-                       "Mass of one wheelset, M_w (paper Table 1).", (False, True))
-    primary_stiffness = _q(2.14e6, (0, None), (5e5, 5e6), "Primary suspension stiffness (N/m)",
-                           "Primary suspension stiffness per axle box, K_pz (paper Table 1).",
-                           (False, True))
-    primary_damping = _q(4.9e4, (0, None), (0.0, 2e5), "Primary suspension damping (N·s/m)",
-                         "Primary suspension damping per axle box, C_pz (paper Table 1).")
-    secondary_stiffness = _q(2.535e6, (0, None), (2e5, 5e6),
-                             "Secondary suspension stiffness (N/m)",
-                             "Secondary suspension stiffness per bogie side, K_sz (paper Table 1).",
-                             (False, True))
-    secondary_damping = _q(1.96e5, (0, None), (0.0, 5e5), "Secondary suspension damping (N·s/m)",
-                           "Secondary suspension damping per bogie side, C_sz (paper Table 1).")
+        "(uniform slender body, MODEL.md §1).",
+        (False, True),
+        allow_none=True,
+    )
+    bogie_mass = _q(
+        2980.0,
+        (0, None),
+        (1500.0, 5000.0),
+        "Bogie frame mass (kg)",
+        "Mass of one bogie frame, M_t (paper Table 1).",
+        (False, True),
+    )
+    bogie_pitch_inertia = _q(
+        3605.0,
+        (0, None),
+        (1000.0, 8000.0),
+        "Bogie pitch inertia (kg·m²)",
+        "Pitch inertia of one bogie frame, J_t (paper Table 1).",
+        (False, True),
+    )
+    wheelset_mass = _q(
+        1350.0,
+        (0, None),
+        (800.0, 2500.0),
+        "Wheelset mass (kg)",
+        "Mass of one wheelset, M_w (paper Table 1).",
+        (False, True),
+    )
+    primary_stiffness = _q(
+        2.14e6,
+        (0, None),
+        (5e5, 5e6),
+        "Primary suspension stiffness (N/m)",
+        "Primary suspension stiffness per axle box, K_pz (paper Table 1).",
+        (False, True),
+    )
+    primary_damping = _q(
+        4.9e4,
+        (0, None),
+        (0.0, 2e5),
+        "Primary suspension damping (N·s/m)",
+        "Primary suspension damping per axle box, C_pz (paper Table 1).",
+    )
+    secondary_stiffness = _q(
+        2.535e6,
+        (0, None),
+        (2e5, 5e6),
+        "Secondary suspension stiffness (N/m)",
+        "Secondary suspension stiffness per bogie side, K_sz (paper Table 1).",
+        (False, True),
+    )
+    secondary_damping = _q(
+        1.96e5,
+        (0, None),
+        (0.0, 5e5),
+        "Secondary suspension damping (N·s/m)",
+        "Secondary suspension damping per bogie side, C_sz (paper Table 1).",
+    )
 
     @property
     def static_wheel_load(self) -> float:
@@ -122,23 +170,51 @@ class Vehicle(param.Parameterized):
 class Train(param.Parameterized):
     """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A train (MODEL.md §1)."""
 
-    n_cars = Count(6, bounds=(1, 12), softbounds=(1, 8), label="Number of cars",
-                   doc="Cars in the train; cars are independent (no coupler stiffness).")
-    speed_kmh = _q(80.0, (0, 400), (20.0, 160.0), "Speed (km/h)",
-                   "Train speed. The paper's case is 80 km/h (paper §4.1).", (False, True))
-    car_length = _q(22.0, (0, 60), (15.0, 30.0), "Car length (m)",
-                    "Length of one car over couplers; 22 m for Type A (MODEL.md §1).",
-                    (False, True))
-    bogie_distance = _q(15.7, (0, 50), (8.0, 20.0), "Bogie-centre distance (m)",
-                        "Distance between the two bogie centres of a car; 15.7 m for Type A.",
-                        (False, True))
-    wheelbase = _q(2.4, (0, 5), (1.8, 3.0), "Bogie wheelbase (m)",
-                   "Axle spacing within a bogie, twice the paper's half wheelbase l_h = 1.2 m.",
-                   (False, True))
+    n_cars = Count(
+        6,
+        bounds=(1, 12),
+        softbounds=(1, 8),
+        label="Number of cars",
+        doc="Cars in the train; cars are independent (no coupler stiffness).",
+    )
+    speed_kmh = _q(
+        80.0,
+        (0, 400),
+        (20.0, 160.0),
+        "Speed (km/h)",
+        "Train speed. The paper's case is 80 km/h (paper §4.1).",
+        (False, True),
+    )
+    car_length = _q(
+        22.0,
+        (0, 60),
+        (15.0, 30.0),
+        "Car length (m)",
+        "Length of one car over couplers; 22 m for Type A (MODEL.md §1).",
+        (False, True),
+    )
+    bogie_distance = _q(
+        15.7,
+        (0, 50),
+        (8.0, 20.0),
+        "Bogie-centre distance (m)",
+        "Distance between the two bogie centres of a car; 15.7 m for Type A.",
+        (False, True),
+    )
+    wheelbase = _q(
+        2.4,
+        (0, 5),
+        (1.8, 3.0),
+        "Bogie wheelbase (m)",
+        "Axle spacing within a bogie, twice the paper's half wheelbase l_h = 1.2 m.",
+        (False, True),
+    )
     single_bogie = param.Boolean(
-        False, label="Single bogie only",
+        False,
+        label="Single bogie only",
         doc="If true, simulate the paper's Fig. 1 model: half a car body on one bogie with two "
-            "wheelsets, instead of the full train.")
+        "wheelsets, instead of the full train.",
+    )
 
     @classmethod
     def type_a(cls, **overrides) -> Train:
@@ -181,33 +257,90 @@ class Track(param.Parameterized):
     60 kg/m rail, 0.6 m block spacing.
     """
 
-    rail_E = _q(2.059e11, (0, None), (1.9e11, 2.2e11), "Rail Young's modulus (Pa)",
-                "Young's modulus of rail steel (assumed, MODEL.md §2).", (False, True))
-    rail_I = _q(3.217e-5, (0, None), (1e-5, 6e-5), "Rail second moment of area (m⁴)",
-                "Vertical-bending second moment of area of the 60 kg/m rail (assumed).",
-                (False, True))
-    rail_mass = _q(60.64, (0, None), (40.0, 80.0), "Rail mass per length (kg/m)",
-                   "Mass per metre of the 60 kg/m rail (assumed).", (False, True))
-    block_spacing = _q(0.6, (0, 2), (0.5, 0.75), "Block spacing (m)",
-                       "Distance between supporting blocks, L_s (assumed).", (False, True))
-    fastener_stiffness = _q(8e7, (0, None), (1e7, 2e8), "Fastener stiffness (N/m)",
-                            "Rail pad / fastener stiffness per block, K_r (assumed).",
-                            (False, True))
-    fastener_damping = _q(5e4, (0, None), (0.0, 2e5), "Fastener damping (N·s/m)",
-                          "Rail pad / fastener damping per block, C_r (assumed).")
-    pad_stiffness = _q(4e7, (0, None), (5e6, 1.5e8), "Block pad stiffness (N/m)",
-                       "Block pad + rubber boot stiffness per block, K_s (assumed).",
-                       (False, True))
-    pad_damping = _q(8e4, (0, None), (0.0, 3e5), "Block pad damping (N·s/m)",
-                     "Block pad + rubber boot damping per block, C_s (assumed).")
-    block_mass = _q(100.0, (0, None), (50.0, 300.0), "Block mass (kg)",
-                    "Mass of one supporting block on one rail, M_s (assumed).", (False, True))
-    wheel_radius = _q(0.42, (0.1, 1.0), (0.35, 0.5), "Wheel radius (m)",
-                      "Rolling radius of the wheel, R (assumed).")
+    rail_E = _q(
+        2.059e11,
+        (0, None),
+        (1.9e11, 2.2e11),
+        "Rail Young's modulus (Pa)",
+        "Young's modulus of rail steel (assumed, MODEL.md §2).",
+        (False, True),
+    )
+    rail_I = _q(
+        3.217e-5,
+        (0, None),
+        (1e-5, 6e-5),
+        "Rail second moment of area (m⁴)",
+        "Vertical-bending second moment of area of the 60 kg/m rail (assumed).",
+        (False, True),
+    )
+    rail_mass = _q(
+        60.64,
+        (0, None),
+        (40.0, 80.0),
+        "Rail mass per length (kg/m)",
+        "Mass per metre of the 60 kg/m rail (assumed).",
+        (False, True),
+    )
+    block_spacing = _q(
+        0.6,
+        (0, 2),
+        (0.5, 0.75),
+        "Block spacing (m)",
+        "Distance between supporting blocks, L_s (assumed).",
+        (False, True),
+    )
+    fastener_stiffness = _q(
+        8e7,
+        (0, None),
+        (1e7, 2e8),
+        "Fastener stiffness (N/m)",
+        "Rail pad / fastener stiffness per block, K_r (assumed).",
+        (False, True),
+    )
+    fastener_damping = _q(
+        5e4,
+        (0, None),
+        (0.0, 2e5),
+        "Fastener damping (N·s/m)",
+        "Rail pad / fastener damping per block, C_r (assumed).",
+    )
+    pad_stiffness = _q(
+        4e7,
+        (0, None),
+        (5e6, 1.5e8),
+        "Block pad stiffness (N/m)",
+        "Block pad + rubber boot stiffness per block, K_s (assumed).",
+        (False, True),
+    )
+    pad_damping = _q(
+        8e4,
+        (0, None),
+        (0.0, 3e5),
+        "Block pad damping (N·s/m)",
+        "Block pad + rubber boot damping per block, C_s (assumed).",
+    )
+    block_mass = _q(
+        100.0,
+        (0, None),
+        (50.0, 300.0),
+        "Block mass (kg)",
+        "Mass of one supporting block on one rail, M_s (assumed).",
+        (False, True),
+    )
+    wheel_radius = _q(
+        0.42,
+        (0.1, 1.0),
+        (0.35, 0.5),
+        "Wheel radius (m)",
+        "Rolling radius of the wheel, R (assumed).",
+    )
     wheel_tread = param.Selector(
-        default="conical", objects=list(HERTZ_FITS), label="Wheel tread",
+        default="conical",
+        objects=list(HERTZ_FITS),
+        label="Wheel tread",
         doc="Tread profile for the Hertz constant: conical G = 4.57 R^-0.149e-8, "
-            "worn G = 3.86 R^-0.115e-8 (paper §2.3, MODEL.md §3).")
+        "worn G = 3.86 R^-0.115e-8 (paper §2.3, MODEL.md §3).",
+    )
 
     @property
     def hertz_constant(self) -> float:
@@ -223,8 +356,11 @@ class Track(param.Parameterized):
     @property
     def support_stiffness(self) -> float:
         """Fastener and block pad in series, per block (N/m)."""
-        return self.fastener_stiffness * self.pad_stiffness / (
-            self.fastener_stiffness + self.pad_stiffness)
+        return (
+            self.fastener_stiffness
+            * self.pad_stiffness
+            / (self.fastener_stiffness + self.pad_stiffness)
+        )
 
     @property
     def winkler_modulus(self) -> float:
@@ -244,39 +380,96 @@ class Track(param.Parameterized):
 class Irregularity(param.Parameterized):
     """Vertical rail-profile irregularity: US FRA PSD, trigonometric-series synthesis (§2.4)."""
 
-    enabled = param.Boolean(True, label="Irregularity on",
-                            doc="If false, the rail is perfectly smooth.")
-    track_class = Count(6, bounds=(1, 6), softbounds=(1, 6), label="FRA track class",
-                        doc="US FRA track class 1–6; 6 is the best track and the paper's choice.")
-    seed = Count(2024, bounds=(0, 2**32 - 1), softbounds=(0, 9999), label="Random seed",
-                 doc="Seed of the random phases of the synthesised profile.")
-    wavelength_min = _q(1.0, (0.05, 500), (0.5, 10.0), "Shortest wavelength (m)",
-                        "Lower end of the synthesised wavelength band (MODEL.md §4: 1 m).")
-    wavelength_max = _q(50.0, (0.1, 1000), (10.0, 120.0), "Longest wavelength (m)",
-                        "Upper end of the synthesised wavelength band (MODEL.md §4: 50 m).")
-    n_components = Count(2000, bounds=(10, 200000), softbounds=(200, 10000),
-                         label="Harmonic components",
-                         doc="Number of cosines in the trigonometric series.")
+    enabled = param.Boolean(
+        True, label="Irregularity on", doc="If false, the rail is perfectly smooth."
+    )
+    track_class = Count(
+        6,
+        bounds=(1, 6),
+        softbounds=(1, 6),
+        label="FRA track class",
+        doc="US FRA track class 1–6; 6 is the best track and the paper's choice.",
+    )
+    seed = Count(
+        2024,
+        bounds=(0, 2**32 - 1),
+        softbounds=(0, 9999),
+        label="Random seed",
+        doc="Seed of the random phases of the synthesised profile.",
+    )
+    wavelength_min = _q(
+        1.0,
+        (0.05, 500),
+        (0.5, 10.0),
+        "Shortest wavelength (m)",
+        "Lower end of the synthesised wavelength band (MODEL.md §4: 1 m).",
+    )
+    wavelength_max = _q(
+        50.0,
+        (0.1, 1000),
+        (10.0, 120.0),
+        "Longest wavelength (m)",
+        "Upper end of the synthesised wavelength band (MODEL.md §4: 50 m).",
+    )
+    n_components = Count(
+        2000,
+        bounds=(10, 200000),
+        softbounds=(200, 10000),
+        label="Harmonic components",
+        doc="Number of cosines in the trigonometric series.",
+    )
     profile_csv = param.String(
-        None, allow_None=True, label="Measured profile CSV",
+        None,
+        allow_None=True,
+        label="Measured profile CSV",
         doc="Path of a measured profile (columns x in m measured from the monitored block, η in "
-            "m or mm); replaces the synthetic profile when set.")
+        "m or mm); replaces the synthetic profile when set.",
+    )
 
 
 class Tunnel(param.Parameterized):
     """Concrete lining as a thin elastic ring in plane strain (paper Table 3, corrected)."""
 
-    inner_radius = _q(2.7, (0, 20), (2.0, 4.0), "Lining inner radius (m)",
-                      "Inner radius of the lining (paper Table 3).", (False, True))
-    thickness = _q(0.30, (0, 2), (0.2, 0.6), "Lining thickness (m)",
-                   "Lining thickness h; the paper's '30 m' is a typo for 0.30 m (MODEL.md §7).",
-                   (False, True))
-    youngs_modulus = _q(3.45e10, (0, None), (1e10, 5e10), "Lining Young's modulus (Pa)",
-                        "Young's modulus of the lining concrete (paper Table 3).", (False, True))
-    poisson_ratio = _q(0.17, (0, 0.5), (0.1, 0.3), "Lining Poisson's ratio (-)",
-                       "Poisson's ratio of the lining concrete (paper Table 3).", (True, False))
-    density = _q(2450.0, (0, None), (2000.0, 2800.0), "Lining density (kg/m³)",
-                 "Density of the lining concrete (paper Table 3).", (False, True))
+    inner_radius = _q(
+        2.7,
+        (0, 20),
+        (2.0, 4.0),
+        "Lining inner radius (m)",
+        "Inner radius of the lining (paper Table 3).",
+        (False, True),
+    )
+    thickness = _q(
+        0.30,
+        (0, 2),
+        (0.2, 0.6),
+        "Lining thickness (m)",
+        "Lining thickness h; the paper's '30 m' is a typo for 0.30 m (MODEL.md §7).",
+        (False, True),
+    )
+    youngs_modulus = _q(
+        3.45e10,
+        (0, None),
+        (1e10, 5e10),
+        "Lining Young's modulus (Pa)",
+        "Young's modulus of the lining concrete (paper Table 3).",
+        (False, True),
+    )
+    poisson_ratio = _q(
+        0.17,
+        (0, 0.5),
+        (0.1, 0.3),
+        "Lining Poisson's ratio (-)",
+        "Poisson's ratio of the lining concrete (paper Table 3).",
+        (True, False),
+    )
+    density = _q(
+        2450.0,
+        (0, None),
+        (2000.0, 2800.0),
+        "Lining density (kg/m³)",
+        "Density of the lining concrete (paper Table 3).",
+        (False, True),
+    )
 
     @property
     def ring_radius(self) -> float:
@@ -302,31 +495,60 @@ class Soil(param.Parameterized):
     reproduces the paper's millimetre magnitudes (MODEL.md §7); the others are presets.
     """
 
-    youngs_modulus = _q(6e6, (0, None), (1e6, 1e8), "Soil Young's modulus (Pa)",
-                        "Young's modulus of the soft soil (paper Table 4).", (False, True))
-    poisson_ratio = _q(0.3, (0, 0.5), (0.1, 0.49), "Soil Poisson's ratio (-)",
-                       "Poisson's ratio of the soil (paper Table 4); must stay below 0.5.",
-                       (True, False))
-    density = _q(1800.0, (0, None), (1400.0, 2200.0), "Soil density (kg/m³)",
-                 "Soil density (assumed typical of Nanjing soft clay; not in Table 4).",
-                 (False, True))
-    shear_loss_factor = _q(0.06, (0, 2), (0.0, 0.3), "Shear loss factor η_G (-)",
-                           "Hysteretic shear loss factor: μ* = μ(1 + iη_G) (paper Table 4).")
-    bulk_loss_factor = _q(0.0, (0, 2), (0.0, 0.3), "Bulk loss factor η_K (-)",
-                          "Hysteretic bulk loss factor: K* = K(1 + iη_K) (paper Table 4).")
+    youngs_modulus = _q(
+        6e6,
+        (0, None),
+        (1e6, 1e8),
+        "Soil Young's modulus (Pa)",
+        "Young's modulus of the soft soil (paper Table 4).",
+        (False, True),
+    )
+    poisson_ratio = _q(
+        0.3,
+        (0, 0.5),
+        (0.1, 0.49),
+        "Soil Poisson's ratio (-)",
+        "Poisson's ratio of the soil (paper Table 4); must stay below 0.5.",
+        (True, False),
+    )
+    density = _q(
+        1800.0,
+        (0, None),
+        (1400.0, 2200.0),
+        "Soil density (kg/m³)",
+        "Soil density (assumed typical of Nanjing soft clay; not in Table 4).",
+        (False, True),
+    )
+    shear_loss_factor = _q(
+        0.06,
+        (0, 2),
+        (0.0, 0.3),
+        "Shear loss factor η_G (-)",
+        "Hysteretic shear loss factor: μ* = μ(1 + iη_G) (paper Table 4).",
+    )
+    bulk_loss_factor = _q(
+        0.0,
+        (0, 2),
+        (0.0, 0.3),
+        "Bulk loss factor η_K (-)",
+        "Hysteretic bulk loss factor: K* = K(1 + iη_K) (paper Table 4).",
+    )
 
     @classmethod
-    def from_lame(cls, lame_lambda: float, shear_modulus: float, density: float,
-                  **overrides) -> Soil:
+    def from_lame(
+        cls, lame_lambda: float, shear_modulus: float, density: float, **overrides
+    ) -> Soil:
         """Soil from its Lamé constants λ, μ (Pa) and density (kg/m³)."""
-        youngs = shear_modulus * (3 * lame_lambda + 2 * shear_modulus) / (
-            lame_lambda + shear_modulus)
+        youngs = (
+            shear_modulus * (3 * lame_lambda + 2 * shear_modulus) / (lame_lambda + shear_modulus)
+        )
         poisson = lame_lambda / (2 * (lame_lambda + shear_modulus))
         return cls(youngs_modulus=youngs, poisson_ratio=poisson, density=density, **overrides)
 
     @classmethod
-    def from_wave_speeds(cls, p_wave_speed: float, s_wave_speed: float, density: float,
-                         **overrides) -> Soil:
+    def from_wave_speeds(
+        cls, p_wave_speed: float, s_wave_speed: float, density: float, **overrides
+    ) -> Soil:
         """Soil from its P- and S-wave speeds c1, c2 (m/s) and density (kg/m³)."""
         shear = density * s_wave_speed**2
         lame_lambda = density * p_wave_speed**2 - 2 * shear
@@ -361,37 +583,87 @@ class Soil(param.Parameterized):
 class Numerics(param.Parameterized):
     """Discretisation and output settings of every stage."""
 
-    dt = _q(1e-4, (0, 1e-2), (2e-5, 2e-4), "Time step Δt (s)",
-            "Time step of Zhai's explicit integrator (paper default 1e-4 s).", (False, True))
-    n_rail_modes = Count(None, bounds=(1, 20000), softbounds=(50, 2000), allow_None=True,
-                         label="Rail modes",
-                         doc="Modes of the simply supported rail; None means L/L_s (shortest "
-                             "modal half-wavelength = block spacing, MODEL.md §2).")
-    rail_end_margin = _q(20.0, (20.0, None), (20.0, 60.0), "Rail end margin (m)",
-                         "Minimum distance from any axle to a rail end during the run "
-                         "(MODEL.md §2: ≥ 20 m).")
-    approach_distance = _q(10.0, (0, None), (5.0, 40.0), "Approach distance (m)",
-                           "Distance of the leading axle before the monitored block at the "
-                           "start, and of the trailing axle past it at the end.")
-    n_harmonics = Count(32, bounds=(1, 1024), softbounds=(4, 128), label="Ring harmonics",
-                        doc="Circumferential harmonics n = 0..N_n summed in the tunnel–soil "
-                            "model.")
-    soil_max_frequency = _q(100.0, (0, 5000), (30.0, 300.0), "Soil model frequency limit (Hz)",
-                            "Highest frequency passed to the tunnel–soil model; the load has "
-                            "negligible content above (paper Fig. 7: 0–30 Hz).", (False, True))
-    zero_pad_factor = Count(8, bounds=(1, 256), softbounds=(1, 32), label="Zero-padding factor",
-                            doc="Record length used for the soil FFT, as a multiple of the "
-                                "passage duration (convergence of the peak is shown in tests).")
-    psd_segment = _q(4.0, (0, None), (1.0, 10.0), "PSD segment length (s)",
-                     "Welch segment length for the one-sided PSDs (frequency resolution 1/T); a "
-                     "shorter record is analysed whole.",
-                     (False, True))
-    max_depth = _q(35.0, (11.0, 500), (11.0, 60.0), "Deepest output depth (m)",
-                   "Depth below the invert down to which the displacement is reported "
-                   "(paper Fig. 11 and conclusions: 35 m); at least 11 m, the paper's "
-                   "comparison depth, which the summary always reports.")
-    n_depths = Count(71, bounds=(2, 2000), softbounds=(11, 201), label="Output depths",
-                     doc="Number of equally spaced depths from the invert to the deepest one.")
+    dt = _q(
+        1e-4,
+        (0, 1e-2),
+        (2e-5, 2e-4),
+        "Time step Δt (s)",
+        "Time step of Zhai's explicit integrator (paper default 1e-4 s).",
+        (False, True),
+    )
+    n_rail_modes = Count(
+        None,
+        bounds=(1, 20000),
+        softbounds=(50, 2000),
+        allow_None=True,
+        label="Rail modes",
+        doc="Modes of the simply supported rail; None means L/L_s (shortest "
+        "modal half-wavelength = block spacing, MODEL.md §2).",
+    )
+    rail_end_margin = _q(
+        20.0,
+        (20.0, None),
+        (20.0, 60.0),
+        "Rail end margin (m)",
+        "Minimum distance from any axle to a rail end during the run (MODEL.md §2: ≥ 20 m).",
+    )
+    approach_distance = _q(
+        10.0,
+        (0, None),
+        (5.0, 40.0),
+        "Approach distance (m)",
+        "Distance of the leading axle before the monitored block at the "
+        "start, and of the trailing axle past it at the end.",
+    )
+    n_harmonics = Count(
+        32,
+        bounds=(1, 1024),
+        softbounds=(4, 128),
+        label="Ring harmonics",
+        doc="Circumferential harmonics n = 0..N_n summed in the tunnel–soil model.",
+    )
+    soil_max_frequency = _q(
+        100.0,
+        (0, 5000),
+        (30.0, 300.0),
+        "Soil model frequency limit (Hz)",
+        "Highest frequency passed to the tunnel–soil model; the load has "
+        "negligible content above (paper Fig. 7: 0–30 Hz).",
+        (False, True),
+    )
+    zero_pad_factor = Count(
+        8,
+        bounds=(1, 256),
+        softbounds=(1, 32),
+        label="Zero-padding factor",
+        doc="Record length used for the soil FFT, as a multiple of the "
+        "passage duration (convergence of the peak is shown in tests).",
+    )
+    psd_segment = _q(
+        4.0,
+        (0, None),
+        (1.0, 10.0),
+        "PSD segment length (s)",
+        "Welch segment length for the one-sided PSDs (frequency resolution 1/T); a "
+        "shorter record is analysed whole.",
+        (False, True),
+    )
+    max_depth = _q(
+        35.0,
+        (11.0, 500),
+        (11.0, 60.0),
+        "Deepest output depth (m)",
+        "Depth below the invert down to which the displacement is reported "
+        "(paper Fig. 11 and conclusions: 35 m); at least 11 m, the paper's "
+        "comparison depth, which the summary always reports.",
+    )
+    n_depths = Count(
+        71,
+        bounds=(2, 2000),
+        softbounds=(11, 201),
+        label="Output depths",
+        doc="Number of equally spaced depths from the invert to the deepest one.",
+    )
 
 
 SECTIONS = ("vehicle", "train", "track", "irregularity", "tunnel", "soil", "numerics")
@@ -454,9 +726,7 @@ class Scenario(param.Parameterized):
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """All inputs as nested plain values, ``{section: {parameter: value}}``."""
         return {
-            section: {
-                name: getattr(obj, name) for name in obj.param if name != "name"
-            }
+            section: {name: getattr(obj, name) for name in obj.param if name != "name"}
             for section in SECTIONS
             for obj in [getattr(self, section)]
         }
@@ -484,12 +754,15 @@ class Scenario(param.Parameterized):
     def update(self, values: dict[str, dict[str, Any]]) -> None:
         """Set parameters from ``{section: {parameter: value}}``; unknown names are refused."""
         if not isinstance(values, dict):
-            raise ValueError(f"a scenario must be an object of sections, not "
-                             f"{type(values).__name__}")
+            raise ValueError(
+                f"a scenario must be an object of sections, not {type(values).__name__}"
+            )
         for section, section_values in values.items():
             if section in SECTIONS and not isinstance(section_values, dict):
-                raise ValueError(f"section {section!r} must be an object of parameters, not "
-                                 f"{type(section_values).__name__}")
+                raise ValueError(
+                    f"section {section!r} must be an object of parameters, not "
+                    f"{type(section_values).__name__}"
+                )
             if section not in SECTIONS:
                 raise KeyError(f"unknown section {section!r}; expected one of {SECTIONS}")
             obj = getattr(self, section)
@@ -506,12 +779,15 @@ class Scenario(param.Parameterized):
         """
         section, _, name = path.partition(".")
         if section not in SECTIONS or not name:
-            raise KeyError(f"{path!r} is not of the form section.parameter with section in "
-                           f"{SECTIONS}")
+            raise KeyError(
+                f"{path!r} is not of the form section.parameter with section in {SECTIONS}"
+            )
         obj = getattr(self, section)
         if name not in obj.param or name == "name":
-            raise KeyError(f"unknown parameter {name!r} in section {section!r}; available: "
-                           f"{', '.join(n for n in obj.param if n != 'name')}")
+            raise KeyError(
+                f"unknown parameter {name!r} in section {section!r}; available: "
+                f"{', '.join(n for n in obj.param if n != 'name')}"
+            )
         if isinstance(value, str):
             value = _parse_value(obj.param[name], path, value)
         setattr(obj, name, value)
@@ -559,20 +835,25 @@ class Scenario(param.Parameterized):
         if irr.wavelength_min >= irr.wavelength_max:
             problems.append(
                 f"irregularity.wavelength_min = {irr.wavelength_min:g} m must be below "
-                f"irregularity.wavelength_max = {irr.wavelength_max:g} m")
+                f"irregularity.wavelength_max = {irr.wavelength_max:g} m"
+            )
         if not tr.single_bogie and tr.bogie_distance + tr.wheelbase >= tr.car_length:
             problems.append(
                 f"train.bogie_distance + train.wheelbase = {tr.bogie_distance + tr.wheelbase:g} m "
-                f"must be shorter than train.car_length = {tr.car_length:g} m")
+                f"must be shorter than train.car_length = {tr.car_length:g} m"
+            )
         if tr.wheelbase >= tr.bogie_distance and not tr.single_bogie:
-            problems.append(f"train.wheelbase = {tr.wheelbase:g} m must be shorter than "
-                            f"train.bogie_distance = {tr.bogie_distance:g} m")
+            problems.append(
+                f"train.wheelbase = {tr.wheelbase:g} m must be shorter than "
+                f"train.bogie_distance = {tr.bogie_distance:g} m"
+            )
         min_modes = math.ceil(0.5 * self.rail_length / self.track.block_spacing)
         if self.rail_modes < min_modes:
             problems.append(
                 f"numerics.n_rail_modes = {self.rail_modes} is too few for a "
                 f"{self.rail_length:g} m rail: at least 0.5 L/L_s = {min_modes} are needed "
-                f"(L/L_s = {2 * min_modes} recommended)")
+                f"(L/L_s = {2 * min_modes} recommended)"
+            )
         if problems:
             raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
 
@@ -592,8 +873,13 @@ def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
         if isinstance(parameter, param.Number):
             return float(text)
     except ValueError:
-        kind = ("true/false" if isinstance(parameter, param.Boolean)
-                else "whole number" if isinstance(parameter, param.Integer) else "number")
+        kind = (
+            "true/false"
+            if isinstance(parameter, param.Boolean)
+            else "whole number"
+            if isinstance(parameter, param.Integer)
+            else "number"
+        )
         raise ValueError(f"{path} = {text!r} is not a {kind} ({parameter.label})") from None
     return text
 

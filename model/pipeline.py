@@ -33,14 +33,21 @@ N_RAILS = 2  # both rails load the same tunnel section (MODEL.md §6)
 # (checked by the tests), so that no setting is silently left out of a cache key.
 VEHICLE_TRACK_NUMERICS = ("dt", "n_rail_modes", "rail_end_margin", "approach_distance")
 LOAD_NUMERICS = ("psd_segment",)
-SOIL_NUMERICS = ("n_harmonics", "soil_max_frequency", "zero_pad_factor", "psd_segment",
-                 "max_depth", "n_depths")
+SOIL_NUMERICS = (
+    "n_harmonics",
+    "soil_max_frequency",
+    "zero_pad_factor",
+    "psd_segment",
+    "max_depth",
+    "n_depths",
+)
 
 STAGES = ("vehicle_track", "load", "soil")
 
 
 class SimulationError(RuntimeError):
     """The vehicle–track integration went unstable; its warnings say why and what to change."""
+
 
 Progress = Callable[[str, float], None]
 
@@ -142,18 +149,25 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     def pick(names):
         return {name: numerics[name] for name in names}
 
-    vehicle_track = {section: data[section]
-                     for section in ("vehicle", "train", "track", "irregularity")}
+    vehicle_track = {
+        section: data[section] for section in ("vehicle", "train", "track", "irregularity")
+    }
     profile_csv = scenario.irregularity.profile_csv
     if profile_csv:  # an edited file must not be served from the cache
         stat = Path(profile_csv).stat() if Path(profile_csv).is_file() else None
         vehicle_track["profile_file"] = stat and [stat.st_mtime_ns, stat.st_size]
     vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
     load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
-    soil = {"upstream": load, "tunnel": data["tunnel"], "soil": data["soil"],
-            "numerics": pick(SOIL_NUMERICS)}
-    return {name: json.dumps(value, sort_keys=True)
-            for name, value in zip(STAGES, (vehicle_track, load, soil), strict=True)}
+    soil = {
+        "upstream": load,
+        "tunnel": data["tunnel"],
+        "soil": data["soil"],
+        "numerics": pick(SOIL_NUMERICS),
+    }
+    return {
+        name: json.dumps(value, sort_keys=True)
+        for name, value in zip(STAGES, (vehicle_track, load, soil), strict=True)
+    }
 
 
 def invert_line_load(block_force_N: np.ndarray, block_spacing_m: float) -> np.ndarray:
@@ -161,8 +175,9 @@ def invert_line_load(block_force_N: np.ndarray, block_spacing_m: float) -> np.nd
     return N_RAILS * block_force_N / block_spacing_m
 
 
-def run(scenario: Scenario, progress: Progress | None = None,
-        cache: StageCache | None = DEFAULT_CACHE) -> Results:
+def run(
+    scenario: Scenario, progress: Progress | None = None, cache: StageCache | None = DEFAULT_CACHE
+) -> Results:
     """Run every stage that the cache cannot serve.
 
     Parameters
@@ -208,18 +223,34 @@ def run(scenario: Scenario, progress: Progress | None = None,
             cache.put(name, keys[name], value)
         return value
 
-    vt = stage("vehicle_track",
-               lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f)))
+    vt = stage(
+        "vehicle_track", lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f))
+    )
     if vt.unstable:
-        raise SimulationError("the vehicle–track simulation went unstable: "
-                              + "; ".join(vt.warnings))
+        raise SimulationError(
+            "the vehicle–track simulation went unstable: " + "; ".join(vt.warnings)
+        )
     load = stage("load", lambda: _load_stage(vt, scenario))
-    soil = stage("soil", lambda: soil_response(load.line_load_N_per_m, _time_step(load.t_s),
-                                               scenario.tunnel, scenario.soil,
-                                               scenario.numerics))
+    soil = stage(
+        "soil",
+        lambda: soil_response(
+            load.line_load_N_per_m,
+            _time_step(load.t_s),
+            scenario.tunnel,
+            scenario.soil,
+            scenario.numerics,
+        ),
+    )
     warnings = list(vt.warnings) + scenario_warnings(scenario)
-    return Results(scenario_json=scenario.to_json(), vehicle_track=vt, load=load, soil=soil,
-                   warnings=warnings, stage_seconds=seconds, cached_stages=tuple(cached))
+    return Results(
+        scenario_json=scenario.to_json(),
+        vehicle_track=vt,
+        load=load,
+        soil=soil,
+        warnings=warnings,
+        stage_seconds=seconds,
+        cached_stages=tuple(cached),
+    )
 
 
 def _load_stage(vt: VehicleTrackResult, scenario: Scenario) -> LoadResult:
@@ -242,13 +273,15 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
         warnings.append(
             f"train speed {speed:.1f} m/s is {speed / shear_speed:.0%} of the soil shear-wave "
             f"speed {shear_speed:.1f} m/s: moving-load effects, which the 2D plane-strain tunnel "
-            "model ignores, become important")
+            "model ignores, become important"
+        )
     numerics, beta = scenario.numerics, scenario.track.winkler_beta
     if numerics.approach_distance * beta < 4.0:
         warnings.append(
             f"numerics.approach_distance = {numerics.approach_distance:g} m is shorter than "
             f"4/β = {4.0 / beta:.1f} m: the record starts and ends with the block still "
-            "loaded, which cuts the load history and lowers the soil response")
+            "loaded, which cuts the load history and lowers the soil response"
+        )
     record = scenario.passage_duration
     needed = record + TAIL_TRANSIT_TIMES * numerics.max_depth / scenario.soil.s_wave_speed
     if numerics.zero_pad_factor * record < needed:
@@ -256,10 +289,12 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
             f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "
             f"record to less than the passage plus the wave-travel tail to "
             f"{numerics.max_depth:g} m ({needed:.2f} s): the deep response is cut short; use "
-            f"at least {math.ceil(needed / record)}")
+            f"at least {math.ceil(needed / record)}"
+        )
     segment = numerics.psd_segment
     if record < segment:
         warnings.append(
             f"the passage lasts {record:.2f} s, less than numerics.psd_segment = {segment:g} s: "
-            f"the PSDs use the whole record, a frequency resolution of {1 / record:.2f} Hz")
+            f"the PSDs use the whole record, a frequency resolution of {1 / record:.2f} Hz"
+        )
     return warnings

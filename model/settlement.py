@@ -84,12 +84,14 @@ def decimation_factor(dt_s: float, max_frequency_hz: float) -> int:
     int
         The decimation factor k.
     """
-    return max(1, math.floor(1.0 / (SAMPLES_PER_MAX_FREQUENCY_PERIOD * max_frequency_hz * dt_s)
-                             + 1e-9))
+    return max(
+        1, math.floor(1.0 / (SAMPLES_PER_MAX_FREQUENCY_PERIOD * max_frequency_hz * dt_s) + 1e-9)
+    )
 
 
-def dc_band_receptance(band_halfwidth_hz: float, depth_m, tunnel, soil,
-                       n_harmonics: int) -> np.ndarray:
+def dc_band_receptance(
+    band_halfwidth_hz: float, depth_m, tunnel, soil, n_harmonics: int
+) -> np.ndarray:
     """Receptance averaged over the zero-frequency bin's band [−h, h] (m per N/m).
 
     Re H(h/e): exact for H = A + B ln f, the 2D low-frequency form (module docstring).
@@ -110,8 +112,7 @@ def dc_band_receptance(band_halfwidth_hz: float, depth_m, tunnel, soil,
     ndarray
         Real (n_depth,) band-averaged receptance.
     """
-    return invert_receptance(band_halfwidth_hz / math.e, depth_m, tunnel, soil,
-                             n_harmonics)[0].real
+    return invert_receptance(band_halfwidth_hz / math.e, depth_m, tunnel, soil, n_harmonics)[0].real
 
 
 def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> SoilResponse:
@@ -141,20 +142,22 @@ def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> Soi
     f_max = numerics.soil_max_frequency
     step = decimation_factor(dt_s, f_max)
     dt_out = step * dt_s
-    n_out_pad = scipy.fft.next_fast_len(math.ceil(numerics.zero_pad_factor * n_record / step),
-                                        real=True)
+    n_out_pad = scipy.fft.next_fast_len(
+        math.ceil(numerics.zero_pad_factor * n_record / step), real=True
+    )
     n_pad = step * n_out_pad
     f_hz, load_spectrum = fourier_transform(load, dt_s, n_pad)
     n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
     if n_keep < 2:
-        raise ValueError(f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
-                         f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding")
+        raise ValueError(
+            f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
+            f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding"
+        )
     f_hz, load_spectrum = f_hz[:n_keep], load_spectrum[:n_keep]
 
     depth = np.linspace(0.0, numerics.max_depth, numerics.n_depths)
     receptance = np.empty((n_keep, depth.size), dtype=complex)
-    receptance[0] = dc_band_receptance(0.5 * f_hz[1], depth, tunnel, soil,
-                                       numerics.n_harmonics)
+    receptance[0] = dc_band_receptance(0.5 * f_hz[1], depth, tunnel, soil, numerics.n_harmonics)
     receptance[1:] = invert_receptance(f_hz[1:], depth, tunnel, soil, numerics.n_harmonics)
 
     disp_spectrum = np.zeros((depth.size, n_out_pad // 2 + 1), dtype=complex)

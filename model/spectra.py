@@ -19,8 +19,7 @@ def checked_record(x, dt_s) -> np.ndarray:
     """
     record = np.asarray(x, dtype=float)
     if record.ndim != 1 or record.size < 2:
-        raise ValueError(f"x must be a 1-D record of at least 2 samples, got shape "
-                         f"{record.shape}")
+        raise ValueError(f"x must be a 1-D record of at least 2 samples, got shape {record.shape}")
     if not np.all(np.isfinite(record)):
         raise ValueError("x contains NaN or infinite samples")
     if not (np.isfinite(dt_s) and dt_s > 0.0):
@@ -72,9 +71,16 @@ def one_sided_psd(x, dt_s: float, segment_s: float) -> tuple[np.ndarray, np.ndar
     if not (np.isfinite(segment_s) and segment_s > 0.0):
         raise ValueError(f"segment_s = {segment_s!r} is outside the allowed range (0, inf) s")
     n_segment, hop = welch_tiling(record.size, max(2, round(segment_s / dt_s)))
-    return scipy.signal.welch(record, fs=1.0 / dt_s, window="hann", nperseg=n_segment,
-                              noverlap=n_segment - hop, detrend="constant",
-                              return_onesided=True, scaling="density")
+    return scipy.signal.welch(
+        record,
+        fs=1.0 / dt_s,
+        window="hann",
+        nperseg=n_segment,
+        noverlap=n_segment - hop,
+        detrend="constant",
+        return_onesided=True,
+        scaling="density",
+    )
 
 
 def fourier_transform(x, dt_s: float, n_fft: int | None = None):

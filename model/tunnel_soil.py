@@ -210,8 +210,9 @@ def _stress_difference_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
     inv_r = 1.0 / r
     inertia_p = (lame + 2.0 * shear) * alpha * alpha  # = −ρω²
     diff_p = inertia_p + 2.0 * shear * (1.0 - n) * delta_p * inv_r
-    diff_sum = (inertia_p + shear * beta * beta
-                + 2.0 * shear * (1.0 - n) * (delta_p + delta_s) * inv_r)
+    diff_sum = (
+        inertia_p + shear * beta * beta + 2.0 * shear * (1.0 - n) * (delta_p + delta_s) * inv_r
+    )
     return diff_p, diff_sum
 
 
@@ -228,9 +229,20 @@ def _bessel_ratios(z, n_max, out):
 
 
 @numba.njit(cache=True, parallel=True, nogil=True)
-def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, ring_mass,
-                           ring_extensional, ring_bending, shear, lame, density,
-                           with_stresses):
+def ring_soil_field_kernel(
+    omega,
+    radius,
+    cos_weight,
+    sin_weight,
+    ring_radius,
+    ring_mass,
+    ring_extensional,
+    ring_bending,
+    shear,
+    lame,
+    density,
+    with_stresses,
+):
     """Soil field of a radially loaded ring in a full-space, summed over harmonics.
 
     The ring (radius a, mass per arc length m, stiffnesses K, D) carries a radial traction
@@ -263,7 +275,7 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
         k0s_a = _bessel_ratios(beta * a, n_max, ratio_s_a)
         amp_p = np.empty(n_max + 1, np.complex128)  # amplitude X of the P solution
         amp_sum = np.empty(n_max + 1, np.complex128)  # amplitude Y of the P + SV sum
-        inertia = -omega[i] ** 2 * ring_mass
+        inertia = -(omega[i] ** 2) * ring_mass
         for n in range(n_max + 1):
             # Ring impedance rows: radial (z_rr, z_rt), tangential (z_rt, z_tt). The system is
             # solved with rows (radial − tangential, tangential); their difference (d_r, d_t) is
@@ -285,10 +297,12 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
                 amp_p[n] = 1.0 / ((inertia + ring_extensional / a**2 + bending) * u_p - srr_p)
                 amp_sum[n] = 0.0
                 continue
-            _, _, _, _, srt_p, srt_sum = _stress_terms(n, a, alpha, beta, delta_p, delta_s,
-                                                       shear, lame)
-            diff_p, diff_sum = _stress_difference_terms(n, a, alpha, beta, delta_p, delta_s,
-                                                        shear, lame)
+            _, _, _, _, srt_p, srt_sum = _stress_terms(
+                n, a, alpha, beta, delta_p, delta_s, shear, lame
+            )
+            diff_p, diff_sum = _stress_difference_terms(
+                n, a, alpha, beta, delta_p, delta_s, shear, lame
+            )
             m00 = d_r * u_p + d_t * v_p - diff_p
             m01 = d_r * u_sum + d_t * v_sum - diff_sum
             m10 = z_rt * u_p + z_tt * v_p - srt_p
@@ -330,7 +344,8 @@ def ring_soil_field_kernel(omega, radius, cos_weight, sin_weight, ring_radius, r
                     u_t[i, j] += sw * (c_p * v_p + c_sum * v_sum)
                     if with_stresses:
                         srr_p, srr_sum, stt_p, stt_sum, srt_p, srt_sum = _stress_terms(
-                            n, r, alpha, beta, delta_p, delta_s, shear, lame)
+                            n, r, alpha, beta, delta_p, delta_s, shear, lame
+                        )
                         s_rr[i, j] += cw * (c_p * srr_p + c_sum * srr_sum)
                         s_tt[i, j] += cw * (c_p * stt_p + c_sum * stt_sum)
                         s_rt[i, j] += sw * (c_p * srt_p + c_sum * srt_sum)
@@ -386,16 +401,21 @@ def _check_ranges(obj, section: str, ranges: dict) -> None:
         above = value >= low if low_incl else value > low
         below = value <= high if high_incl else value < high
         if not (math.isfinite(value) and above and below):
-            interval = (f"{'[' if low_incl else '('}{low:g}, {high:g}{']' if high_incl else ')'}")
-            raise ValueError(f"{section}.{name} = {value!r} is outside the physical range "
-                             f"{interval}")
+            interval = f"{'[' if low_incl else '('}{low:g}, {high:g}{']' if high_incl else ')'}"
+            raise ValueError(
+                f"{section}.{name} = {value!r} is outside the physical range {interval}"
+            )
 
 
 def _ring_constants(tunnel) -> tuple[float, float, float, float]:
     """(a, m, K, D) of the lining ring, after checking its parameters."""
     _check_ranges(tunnel, "tunnel", _RING_RANGES)
-    return (tunnel.ring_radius, tunnel.density * tunnel.thickness,
-            tunnel.extensional_stiffness, tunnel.bending_stiffness)
+    return (
+        tunnel.ring_radius,
+        tunnel.density * tunnel.thickness,
+        tunnel.extensional_stiffness,
+        tunnel.bending_stiffness,
+    )
 
 
 def _soil_constants(soil) -> tuple[complex, complex, float]:
@@ -412,8 +432,10 @@ def _as_1d(values, name: str, unit: str) -> np.ndarray:
     if array.ndim != 1:
         raise ValueError(f"{name} must be a scalar or a 1-D array, got shape {array.shape}")
     if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} contains {float(array[~np.isfinite(array)][0])!r}; finite values "
-                         f"in {unit} are required")
+        raise ValueError(
+            f"{name} contains {float(array[~np.isfinite(array)][0])!r}; finite values "
+            f"in {unit} are required"
+        )
     return array
 
 
@@ -425,14 +447,18 @@ def _angular_frequency(freq_hz) -> np.ndarray:
         raise ValueError(
             f"freq_hz = {bad!r} is outside the allowed range (0, inf) Hz: the 2D static (f = 0) "
             f"response is infinite; model.settlement treats the zero-frequency bin by averaging "
-            f"over its band")
+            f"over its band"
+        )
     return 2.0 * np.pi * freq
 
 
 def _check_harmonics(n_harmonics) -> int:
     """n_harmonics as an int ≥ 0."""
-    if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, int | np.integer) or (
-            n_harmonics < 0):
+    if (
+        isinstance(n_harmonics, bool)
+        or not isinstance(n_harmonics, int | np.integer)
+        or (n_harmonics < 0)
+    ):
         raise ValueError(f"n_harmonics = {n_harmonics!r} must be an integer ≥ 0")
     return int(n_harmonics)
 
@@ -442,8 +468,10 @@ def _check_radius(radius_m, ring_radius: float) -> np.ndarray:
     radius = _as_1d(radius_m, "radius_m", "m")
     if np.any(radius < ring_radius):
         bad = float(radius[radius < ring_radius][0])
-        raise ValueError(f"radius_m = {bad!r} is inside the lining: soil points need "
-                         f"r ≥ a = {ring_radius:g} m (ring radius)")
+        raise ValueError(
+            f"radius_m = {bad!r} is inside the lining: soil points need "
+            f"r ≥ a = {ring_radius:g} m (ring radius)"
+        )
     return radius
 
 
@@ -473,13 +501,26 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
     """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
     a, mass, extensional, bending = _ring_constants(tunnel)
     shear, lame, density = _soil_constants(soil)
-    fields = ring_soil_field_kernel(omega, radius, np.ascontiguousarray(cos_weight),
-                                    np.ascontiguousarray(sin_weight), a, mass, extensional,
-                                    bending, shear, lame, density, with_stresses)
+    fields = ring_soil_field_kernel(
+        omega,
+        radius,
+        np.ascontiguousarray(cos_weight),
+        np.ascontiguousarray(sin_weight),
+        a,
+        mass,
+        extensional,
+        bending,
+        shear,
+        lame,
+        density,
+        with_stresses,
+    )
     for field in fields:
         if not np.all(np.isfinite(field)):
-            raise ValueError("the ring–soil solution is not finite; check the inputs "
-                                     "(extreme frequency or parameters)")
+            raise ValueError(
+                "the ring–soil solution is not finite; check the inputs "
+                "(extreme frequency or parameters)"
+            )
     return fields
 
 
@@ -512,13 +553,16 @@ def invert_receptance(freq_hz, depth_m, tunnel, soil, n_harmonics: int) -> np.nd
     depth = _as_1d(depth_m, "depth_m", "m")
     if np.any(depth < 0.0):
         bad = float(depth[depth < 0.0][0])
-        raise ValueError(f"depth_m = {bad!r} is inside the lining: depths are measured from "
-                         f"the ring–soil interface and must be ≥ 0 m")
+        raise ValueError(
+            f"depth_m = {bad!r} is inside the lining: depths are measured from "
+            f"the ring–soil interface and must be ≥ 0 m"
+        )
     coefficients = invert_load_coefficients(tunnel.ring_radius, n_harmonics)
     cos_weight = np.broadcast_to(coefficients, (depth.size, coefficients.size))
     sin_weight = np.zeros_like(cos_weight)
-    u_r = _run_kernel(omega, tunnel.ring_radius + depth, cos_weight, sin_weight, tunnel, soil,
-                      with_stresses=False)[0]
+    u_r = _run_kernel(
+        omega, tunnel.ring_radius + depth, cos_weight, sin_weight, tunnel, soil, with_stresses=False
+    )[0]
     return u_r
 
 
@@ -543,12 +587,20 @@ def soil_field(freq_hz, radius_m, theta_rad, tunnel, soil, n_harmonics: int) -> 
         u_r, u_θ (m per N/m) and σ_rr, σ_θθ, σ_rθ (Pa per N/m), complex (n_freq, n_points).
     """
     omega = _angular_frequency(freq_hz)
-    radius, theta = np.broadcast_arrays(_check_radius(radius_m, tunnel.ring_radius),
-                                        _as_1d(theta_rad, "theta_rad", "rad"))
+    radius, theta = np.broadcast_arrays(
+        _check_radius(radius_m, tunnel.ring_radius), _as_1d(theta_rad, "theta_rad", "rad")
+    )
     coefficients = invert_load_coefficients(tunnel.ring_radius, n_harmonics)
     n_theta = np.outer(theta, np.arange(coefficients.size))
-    fields = _run_kernel(omega, np.ascontiguousarray(radius), coefficients * np.cos(n_theta),
-                         coefficients * np.sin(n_theta), tunnel, soil, with_stresses=True)
+    fields = _run_kernel(
+        omega,
+        np.ascontiguousarray(radius),
+        coefficients * np.cos(n_theta),
+        coefficients * np.sin(n_theta),
+        tunnel,
+        soil,
+        with_stresses=True,
+    )
     return SoilField(*fields)
 
 
@@ -579,8 +631,7 @@ def harmonic_field(freq_hz, radius_m, tunnel, soil, n: int) -> SoilField:
     radius = _check_radius(radius_m, tunnel.ring_radius)
     weight = np.zeros((radius.size, _check_harmonics(n) + 1))
     weight[:, n] = 1.0
-    return SoilField(*_run_kernel(omega, radius, weight, weight, tunnel, soil,
-                                  with_stresses=True))
+    return SoilField(*_run_kernel(omega, radius, weight, weight, tunnel, soil, with_stresses=True))
 
 
 def ring_displacement_harmonics(freq_hz, tunnel, soil, n_harmonics: int):
@@ -605,8 +656,7 @@ def ring_displacement_harmonics(freq_hz, tunnel, soil, n_harmonics: int):
     coefficients = invert_load_coefficients(tunnel.ring_radius, n_harmonics)
     weight = np.diag(coefficients)
     radius = np.full(coefficients.size, tunnel.ring_radius)
-    u_r, u_t, *_ = _run_kernel(omega, radius, weight, weight, tunnel, soil,
-                               with_stresses=False)
+    u_r, u_t, *_ = _run_kernel(omega, radius, weight, weight, tunnel, soil, with_stresses=False)
     return u_r, u_t
 
 

@@ -38,7 +38,8 @@ MAX_CONTACT_EVENTS = 10_000
 PROGRESS_CALLS = 40
 
 CONTACT_EVENT_DTYPE = np.dtype(
-    [("wheel", np.int64), ("t_s", float), ("x_m", float), ("duration_s", float)])
+    [("wheel", np.int64), ("t_s", float), ("x_m", float), ("duration_s", float)]
+)
 
 
 @dataclass
@@ -135,13 +136,19 @@ def _track_system(scenario: Scenario) -> _TrackSystem:
     fold = np.where(upper, 2 * n_spacings - remainder, remainder)
     coupled = (fold > 0) & (fold < n_spacings)
     return _TrackSystem(
-        length=length, n_spacings=n_spacings, omega2=omega2,
+        length=length,
+        n_spacings=n_spacings,
+        omega2=omega2,
         fold_index=np.where(coupled, fold - 1, -1).astype(np.int64),
         fold_sign=np.where(coupled, np.where(upper, -1.0, 1.0), 0.0),
         block_gain=1.0 / math.sqrt(track.rail_mass * track.block_spacing),
         mode_amplitude=math.sqrt(2.0 / (track.rail_mass * length)),
-        fastener_k=track.fastener_stiffness, fastener_c=track.fastener_damping,
-        pad_k=track.pad_stiffness, pad_c=track.pad_damping, block_mass=track.block_mass)
+        fastener_k=track.fastener_stiffness,
+        fastener_c=track.fastener_damping,
+        pad_k=track.pad_stiffness,
+        pad_c=track.pad_damping,
+        block_mass=track.block_mass,
+    )
 
 
 def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
@@ -156,17 +163,27 @@ def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
     half_wheelbase = 0.5 * train.wheelbase
     if train.single_bogie:
         # DOFs: body bounce, bogie bounce, bogie pitch, wheelset 1, wheelset 2
-        masses = [veh.car_body_mass / 4, veh.bogie_mass / 2, veh.bogie_pitch_inertia / 2,
-                  veh.wheelset_mass / 2, veh.wheelset_mass / 2]
+        masses = [
+            veh.car_body_mass / 4,
+            veh.bogie_mass / 2,
+            veh.bogie_pitch_inertia / 2,
+            veh.wheelset_mass / 2,
+            veh.wheelset_mass / 2,
+        ]
         translational = [True, True, False, True, True]
         body_point = [{0: 1.0}]  # secondary attachment on the body, per bogie
         bogies = [(1, 2)]
         wheels = [3, 4]
     else:
         # DOFs: body bounce, body pitch, (bogie bounce, bogie pitch) × 2, wheelsets 1–4
-        masses = [veh.car_body_mass / 2, scenario.car_body_pitch_inertia / 2,
-                  veh.bogie_mass / 2, veh.bogie_pitch_inertia / 2,
-                  veh.bogie_mass / 2, veh.bogie_pitch_inertia / 2] + [veh.wheelset_mass / 2] * 4
+        masses = [
+            veh.car_body_mass / 2,
+            scenario.car_body_pitch_inertia / 2,
+            veh.bogie_mass / 2,
+            veh.bogie_pitch_inertia / 2,
+            veh.bogie_mass / 2,
+            veh.bogie_pitch_inertia / 2,
+        ] + [veh.wheelset_mass / 2] * 4
         translational = [True, False, True, False, True, False, True, True, True, True]
         half_bogie_distance = 0.5 * train.bogie_distance
         body_point = [{0: 1.0, 1: -half_bogie_distance}, {0: 1.0, 1: half_bogie_distance}]
@@ -187,8 +204,11 @@ def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
     for b, (bounce, pitch) in enumerate(bogies):
         spring(veh.secondary_stiffness, veh.secondary_damping, {**body_point[b], bounce: -1.0})
         for w, lever in enumerate((-half_wheelbase, half_wheelbase)):
-            spring(veh.primary_stiffness, veh.primary_damping,
-                   {bounce: 1.0, pitch: lever, wheels[2 * b + w]: -1.0})
+            spring(
+                veh.primary_stiffness,
+                veh.primary_damping,
+                {bounce: 1.0, pitch: lever, wheels[2 * b + w]: -1.0},
+            )
     mass = np.array(masses)
     gravity = np.where(translational, mass * GRAVITY, 0.0)
     n_cars = 1 if train.single_bogie else train.n_cars
@@ -198,11 +218,13 @@ def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
         damping=np.tile(damping, (n_cars, 1, 1)),
         gravity_force=np.tile(gravity, (n_cars, 1)),
         wheel_dof=np.tile(np.array(wheels, dtype=np.int64), (n_cars, 1)),
-        body_dof=0)
+        body_dof=0,
+    )
 
 
-def _vehicle_static(vehicle: _VehicleSystem, wheel_disp: np.ndarray,
-                    wheel_vel: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _vehicle_static(
+    vehicle: _VehicleSystem, wheel_disp: np.ndarray, wheel_vel: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Vehicle equilibrium on wheelsets at given displacements (and quasi-static velocities).
 
     Returns the flat DOF displacements and velocities and the wheel–rail forces (N), which do
@@ -217,17 +239,19 @@ def _vehicle_static(vehicle: _VehicleSystem, wheel_disp: np.ndarray,
         wheels = vehicle.wheel_dof[car]
         others = np.setdiff1d(np.arange(n_dof), wheels)
         k = vehicle.stiffness[car]
-        u_w = wheel_disp[car * per_car:(car + 1) * per_car]
-        v_w = wheel_vel[car * per_car:(car + 1) * per_car]
+        u_w = wheel_disp[car * per_car : (car + 1) * per_car]
+        v_w = wheel_vel[car * per_car : (car + 1) * per_car]
         k_oo, k_ow = k[np.ix_(others, others)], k[np.ix_(others, wheels)]
         u_o = np.linalg.solve(k_oo, vehicle.gravity_force[car, others] - k_ow @ u_w)
         v_o = np.linalg.solve(k_oo, -k_ow @ v_w)
         base = car * n_dof
         u[base + others], u[base + wheels] = u_o, u_w
         v[base + others], v[base + wheels] = v_o, v_w
-        force[car * per_car:(car + 1) * per_car] = (
-            vehicle.gravity_force[car, wheels] - k[np.ix_(wheels, others)] @ u_o
-            - k[np.ix_(wheels, wheels)] @ u_w)
+        force[car * per_car : (car + 1) * per_car] = (
+            vehicle.gravity_force[car, wheels]
+            - k[np.ix_(wheels, others)] @ u_o
+            - k[np.ix_(wheels, wheels)] @ u_w
+        )
     return u, v, force
 
 
@@ -281,8 +305,11 @@ class _Model:
 
 def _wheel_start_positions(scenario: Scenario) -> np.ndarray:
     """Wheel positions at t = 0 (m): the leading axle ``approach_distance`` before mid-rail."""
-    return (0.5 * scenario.rail_length - scenario.numerics.approach_distance
-            - np.asarray(scenario.train.axle_offsets, dtype=float))
+    return (
+        0.5 * scenario.rail_length
+        - scenario.numerics.approach_distance
+        - np.asarray(scenario.train.axle_offsets, dtype=float)
+    )
 
 
 def _build_model(scenario: Scenario, duration: float) -> _Model:
@@ -299,12 +326,20 @@ def _build_model(scenario: Scenario, duration: float) -> _Model:
     n_grid = math.ceil((wheel_x0.max() + speed * duration - start) / eta_step) + 2
     grid = start + eta_step * np.arange(n_grid)
     return _Model(
-        track=track, vehicle=_vehicle_system(scenario), wheel_x0=wheel_x0, speed=speed,
-        hertz_constant=scenario.track.hertz_constant, prescribed_load=np.array([-1.0]),
+        track=track,
+        vehicle=_vehicle_system(scenario),
+        wheel_x0=wheel_x0,
+        speed=speed,
+        hertz_constant=scenario.track.hertz_constant,
+        prescribed_load=np.array([-1.0]),
         eta_grid=np.ascontiguousarray(
             irregularity.profile_for(scenario.irregularity, grid - 0.5 * scenario.rail_length),
-            dtype=float),
-        eta_start=float(start), eta_step=eta_step, monitored_block=track.n_spacings // 2)
+            dtype=float,
+        ),
+        eta_start=float(start),
+        eta_step=eta_step,
+        monitored_block=track.n_spacings // 2,
+    )
 
 
 def _static_loads(model: _Model) -> np.ndarray:
@@ -330,18 +365,35 @@ def _initial_state(model: _Model) -> dict[str, np.ndarray]:
     q, s = _track_static(track, shapes @ loads)
     qd, sd = _track_static(track, model.speed * (slopes @ loads))
     eta = model.profile(x0)
-    eta_slope = (model.profile(x0 + 0.5 * model.eta_step)
-                 - model.profile(x0 - 0.5 * model.eta_step)) / model.eta_step
+    eta_slope = (
+        model.profile(x0 + 0.5 * model.eta_step) - model.profile(x0 - 0.5 * model.eta_step)
+    ) / model.eta_step
     wheel_disp = shapes.T @ q + eta + model.hertz_constant * loads ** (2.0 / 3.0)
     wheel_vel = model.speed * (slopes.T @ q + eta_slope) + shapes.T @ qd
     u, ud, _ = _vehicle_static(vehicle, wheel_disp, wheel_vel)
-    return {"q": q, "qd": qd, "qdd": np.zeros_like(q), "qdd_prev": np.zeros_like(q),
-            "s": s, "sd": sd, "sdd": np.zeros_like(s), "sdd_prev": np.zeros_like(s),
-            "u": u, "ud": ud, "udd": np.zeros_like(u), "udd_prev": np.zeros_like(u)}
+    return {
+        "q": q,
+        "qd": qd,
+        "qdd": np.zeros_like(q),
+        "qdd_prev": np.zeros_like(q),
+        "s": s,
+        "sd": sd,
+        "sdd": np.zeros_like(s),
+        "sdd_prev": np.zeros_like(s),
+        "u": u,
+        "ud": ud,
+        "udd": np.zeros_like(u),
+        "udd_prev": np.zeros_like(u),
+    }
 
 
-def _integrate(model: _Model, state: dict[str, np.ndarray], n_steps: int, dt: float,
-               progress: Callable[[float], None] | None = None) -> dict:
+def _integrate(
+    model: _Model,
+    state: dict[str, np.ndarray],
+    n_steps: int,
+    dt: float,
+    progress: Callable[[float], None] | None = None,
+) -> dict:
     """Run the kernel for ``n_steps`` from ``state`` (modified in place); outputs and status.
 
     The kernel runs in at most ``PROGRESS_CALLS`` chunks so ``progress`` can be told the
@@ -352,32 +404,95 @@ def _integrate(model: _Model, state: dict[str, np.ndarray], n_steps: int, dt: fl
     n_wheels = model.wheel_x0.size
     n_bodies = vehicle.inv_mass.shape[0]
     nt = n_steps + 1
-    out = {"block_force": np.zeros(nt), "block_disp": np.zeros(nt), "rail_disp": np.zeros(nt),
-           "wheel_force": np.zeros((n_wheels, nt)), "wheel_acc": np.zeros((n_wheels, nt)),
-           "body_acc": np.zeros((n_bodies, nt))}
+    out = {
+        "block_force": np.zeros(nt),
+        "block_disp": np.zeros(nt),
+        "rail_disp": np.zeros(nt),
+        "wheel_force": np.zeros((n_wheels, nt)),
+        "wheel_acc": np.zeros((n_wheels, nt)),
+        "body_acc": np.zeros((n_bodies, nt)),
+    }
     block_weight = track.block_mode_weights(model.monitored_block)
     rail_weight = track.mode_shapes(np.array([model.monitored_x]))[:, 0].copy()
-    track_args = (track.omega2, track.fold_index, track.fold_sign, track.block_gain,
-                  track.mode_amplitude, track.wavenumber_unit, track.fastener_k,
-                  track.fastener_c, track.pad_k, track.pad_c, track.block_mass)
-    vehicle_args = (vehicle.inv_mass, vehicle.stiffness, vehicle.damping,
-                    vehicle.gravity_force, vehicle.wheel_dof)
-    wheel_args = (model.wheel_x0, model.speed, model.hertz_constant, model.prescribed_load,
-                  model.eta_grid, model.eta_start, model.eta_step)
+    track_args = (
+        track.omega2,
+        track.fold_index,
+        track.fold_sign,
+        track.block_gain,
+        track.mode_amplitude,
+        track.wavenumber_unit,
+        track.fastener_k,
+        track.fastener_c,
+        track.pad_k,
+        track.pad_c,
+        track.block_mass,
+    )
+    vehicle_args = (
+        vehicle.inv_mass,
+        vehicle.stiffness,
+        vehicle.damping,
+        vehicle.gravity_force,
+        vehicle.wheel_dof,
+    )
+    wheel_args = (
+        model.wheel_x0,
+        model.speed,
+        model.hertz_constant,
+        model.prescribed_load,
+        model.eta_grid,
+        model.eta_start,
+        model.eta_step,
+    )
     st = state
-    scratch = (np.empty((track.omega2.size, n_wheels)), np.empty((3, n_wheels)),
-               np.empty(n_wheels),
-               np.empty(track.n_spacings - 1), np.empty(track.n_spacings - 1),
-               np.empty(track.n_spacings - 1), np.empty(n_wheels), np.empty(n_wheels))
+    scratch = (
+        np.empty((track.omega2.size, n_wheels)),
+        np.empty((3, n_wheels)),
+        np.empty(n_wheels),
+        np.empty(track.n_spacings - 1),
+        np.empty(track.n_spacings - 1),
+        np.empty(track.n_spacings - 1),
+        np.empty(n_wheels),
+        np.empty(n_wheels),
+    )
     wheel_force = np.empty(n_wheels)
-    kernels.accelerations(0.0, st["q"], st["qd"], st["qdd"], st["s"], st["sd"], st["sdd"],
-                          st["u"], st["ud"], st["udd"], *track_args, *vehicle_args,
-                          *wheel_args, *scratch, wheel_force)
-    kernels.record(0, st["q"], st["s"], st["sd"], st["udd"], vehicle.inv_mass.shape[1],
-                   vehicle.wheel_dof, vehicle.body_dof, track.pad_k, track.pad_c,
-                   block_weight, rail_weight, wheel_force, out["block_force"],
-                   out["block_disp"], out["rail_disp"], out["wheel_force"], out["wheel_acc"],
-                   out["body_acc"])
+    kernels.accelerations(
+        0.0,
+        st["q"],
+        st["qd"],
+        st["qdd"],
+        st["s"],
+        st["sd"],
+        st["sdd"],
+        st["u"],
+        st["ud"],
+        st["udd"],
+        *track_args,
+        *vehicle_args,
+        *wheel_args,
+        *scratch,
+        wheel_force,
+    )
+    kernels.record(
+        0,
+        st["q"],
+        st["s"],
+        st["sd"],
+        st["udd"],
+        vehicle.inv_mass.shape[1],
+        vehicle.wheel_dof,
+        vehicle.body_dof,
+        track.pad_k,
+        track.pad_c,
+        block_weight,
+        rail_weight,
+        wheel_force,
+        out["block_force"],
+        out["block_disp"],
+        out["rail_disp"],
+        out["wheel_force"],
+        out["wheel_acc"],
+        out["body_acc"],
+    )
     in_contact = wheel_force > 0.0
     open_event = np.full(n_wheels, -1, dtype=np.int64)
     events = np.zeros((MAX_CONTACT_EVENTS, 4))
@@ -391,14 +506,41 @@ def _integrate(model: _Model, state: dict[str, np.ndarray], n_steps: int, dt: fl
     for start in range(0, n_steps, chunk):
         stop = min(start + chunk, n_steps)
         status = kernels.advance(
-            start, stop, dt, ZHAI_PHI, ZHAI_PSI,
-            st["q"], st["qd"], st["qdd"], st["qdd_prev"], st["s"], st["sd"], st["sdd"],
-            st["sdd_prev"], st["u"], st["ud"], st["udd"], st["udd_prev"],
-            *track_args, *vehicle_args, vehicle.body_dof, *wheel_args,
-            block_weight, rail_weight, DIVERGENCE_COMPRESSION,
-            in_contact, open_event, events, event_count,
-            out["block_force"], out["block_disp"], out["rail_disp"], out["wheel_force"],
-            out["wheel_acc"], out["body_acc"])
+            start,
+            stop,
+            dt,
+            ZHAI_PHI,
+            ZHAI_PSI,
+            st["q"],
+            st["qd"],
+            st["qdd"],
+            st["qdd_prev"],
+            st["s"],
+            st["sd"],
+            st["sdd"],
+            st["sdd_prev"],
+            st["u"],
+            st["ud"],
+            st["udd"],
+            st["udd_prev"],
+            *track_args,
+            *vehicle_args,
+            vehicle.body_dof,
+            *wheel_args,
+            block_weight,
+            rail_weight,
+            DIVERGENCE_COMPRESSION,
+            in_contact,
+            open_event,
+            events,
+            event_count,
+            out["block_force"],
+            out["block_disp"],
+            out["rail_disp"],
+            out["wheel_force"],
+            out["wheel_acc"],
+            out["body_acc"],
+        )
         if status != kernels.RUNNING:
             diverged = int(status)
             break
@@ -408,7 +550,7 @@ def _integrate(model: _Model, state: dict[str, np.ndarray], n_steps: int, dt: fl
         if progress is not None:
             progress(stop / n_steps)
     n_events = int(event_count[0])
-    events = events[:min(n_events, MAX_CONTACT_EVENTS)]
+    events = events[: min(n_events, MAX_CONTACT_EVENTS)]
     still_open = events[:, 3] < 0.0
     last_t = (diverged if diverged is not None else n_steps) * dt
     events[still_open, 3] = last_t
@@ -467,9 +609,11 @@ def stable_time_step(scenario: Scenario) -> float:
     gain = math.sqrt(shared) * system.block_gain
 
     def track_coupling(fastener, pad):
-        return _largest_eigenvalue_2x2(fastener * gain**2,
-                                       -fastener * gain / math.sqrt(track.block_mass),
-                                       (fastener + pad) / track.block_mass)
+        return _largest_eigenvalue_2x2(
+            fastener * gain**2,
+            -fastener * gain / math.sqrt(track.block_mass),
+            (fastener + pad) / track.block_mass,
+        )
 
     scale = np.sqrt(vehicle.inv_mass[0])
     vehicle_k = np.linalg.eigvalsh(scale[:, None] * vehicle.stiffness[0] * scale).max()
@@ -479,9 +623,13 @@ def stable_time_step(scenario: Scenario) -> float:
     shapes = system.mode_shapes(_wheel_start_positions(scenario))
     wheel_inv_mass = vehicle.inv_mass[:, vehicle.wheel_dof[0]].ravel()
     gram = shapes.T @ shapes + np.diag(wheel_inv_mass)
-    omega2 = (max(system.omega2[-1] + track_coupling(track.fastener_stiffness,
-                                                     track.pad_stiffness), vehicle_k)
-              + k_hertz * np.linalg.eigvalsh(gram).max())
+    omega2 = (
+        max(
+            system.omega2[-1] + track_coupling(track.fastener_stiffness, track.pad_stiffness),
+            vehicle_k,
+        )
+        + k_hertz * np.linalg.eigvalsh(gram).max()
+    )
     gamma = max(track_coupling(track.fastener_damping, track.pad_damping), vehicle_c)
     return STABILITY_SAFETY * zhai_damped_limit(math.sqrt(omega2), gamma)
 
@@ -519,14 +667,16 @@ def check_inputs(scenario: Scenario) -> float:
             f"numerics.dt = {numerics.dt:g} s is above the explicit stability limit of this "
             f"scenario ({scenario.rail_modes} rail modes, highest ω ≈ "
             f"{math.sqrt(_track_system(scenario).omega2[-1]):.4g} rad/s); allowed range "
-            f"(0, {limit:.4g}] s: lower the time step or the number of rail modes")
+            f"(0, {limit:.4g}] s: lower the time step or the number of rail modes"
+        )
     n_channels = 3 + 2 * train.n_wheels + (1 if train.single_bogie else train.n_cars)
     n_values = (_n_steps(scenario) + 1) * n_channels
     if n_values > MAX_OUTPUT_VALUES:
         raise ValueError(
             f"numerics.dt = {numerics.dt:g} s gives {_n_steps(scenario)} time steps for a "
             f"{scenario.passage_duration:.3g} s passage, {n_values:.3g} output values in all; "
-            f"allowed up to {MAX_OUTPUT_VALUES:.3g}: raise the time step or the speed")
+            f"allowed up to {MAX_OUTPUT_VALUES:.3g}: raise the time step or the speed"
+        )
     return limit
 
 
@@ -553,13 +703,19 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
     x_mon = 0.5 * scenario.rail_length
     x0 = _wheel_start_positions(scenario)
     xi = np.abs(x0[:, None] + train.speed * np.asarray(t_s)[None, :] - x_mon) * beta
-    rail = (scenario.vehicle.static_wheel_load * beta / (2.0 * modulus)
-            * np.exp(-xi) * (np.cos(xi) + np.sin(xi))).sum(axis=0)
+    rail = (
+        scenario.vehicle.static_wheel_load
+        * beta
+        / (2.0 * modulus)
+        * np.exp(-xi)
+        * (np.cos(xi) + np.sin(xi))
+    ).sum(axis=0)
     return rail * track.fastener_stiffness / (track.fastener_stiffness + track.pad_stiffness)
 
 
-def simulate(scenario: Scenario,
-             progress: Callable[[float], None] | None = None) -> VehicleTrackResult:
+def simulate(
+    scenario: Scenario, progress: Callable[[float], None] | None = None
+) -> VehicleTrackResult:
     """Passage of the train (or single bogie) over the monitored block at mid-rail.
 
     The leading axle starts ``numerics.approach_distance`` before the monitored block and the
@@ -601,21 +757,32 @@ def simulate(scenario: Scenario,
             f"the integration diverged at t = {nt * dt:.4g} s (a wheel–rail compression passed "
             f"{DIVERGENCE_COMPRESSION * 1e3:g} mm or became non-finite) and was stopped; the "
             f"record ends there. The time step {dt:g} s is too large for this scenario: use a "
-            f"smaller numerics.dt (estimated limit {stable_dt:.3g} s).")
+            f"smaller numerics.dt (estimated limit {stable_dt:.3g} s)."
+        )
     events = _contact_events(run["events"])
     if run["n_events"]:
         warnings.append(_contact_loss_message(events, run["n_events"]))
     return VehicleTrackResult(
-        t_s=t, block_force_N=run["block_force"][:nt], block_disp_m=run["block_disp"][:nt],
-        rail_disp_m=run["rail_disp"][:nt], wheel_force_N=run["wheel_force"][:, :nt],
-        wheel_acc_m_s2=run["wheel_acc"][:, :nt], car_body_acc_m_s2=run["body_acc"][:, :nt],
+        t_s=t,
+        block_force_N=run["block_force"][:nt],
+        block_disp_m=run["block_disp"][:nt],
+        rail_disp_m=run["rail_disp"][:nt],
+        wheel_force_N=run["wheel_force"][:, :nt],
+        wheel_acc_m_s2=run["wheel_acc"][:, :nt],
+        car_body_acc_m_s2=run["body_acc"][:, :nt],
         axle_pass_times_s=(scenario.numerics.approach_distance + offsets) / model.speed,
         winkler_block_disp_m=winkler_block_displacement(scenario, t),
-        monitored_block_x_m=model.monitored_x, contact_loss=events,
-        unstable=run["diverged"] is not None, warnings=warnings,
-        static_wheel_load_N=float(_static_loads(model)[0]), dt_s=dt,
-        stable_dt_s=stable_dt, n_rail_modes=model.track.omega2.size,
-        rail_length_m=model.track.length, speed_m_s=model.speed)
+        monitored_block_x_m=model.monitored_x,
+        contact_loss=events,
+        unstable=run["diverged"] is not None,
+        warnings=warnings,
+        static_wheel_load_N=float(_static_loads(model)[0]),
+        dt_s=dt,
+        stable_dt_s=stable_dt,
+        n_rail_modes=model.track.omega2.size,
+        rail_length_m=model.track.length,
+        speed_m_s=model.speed,
+    )
 
 
 def _contact_events(rows: np.ndarray) -> np.ndarray:
@@ -632,6 +799,8 @@ def _contact_loss_message(events: np.ndarray, n_events: int) -> str:
     """Human-readable summary of loss-of-contact events."""
     shown = "; ".join(
         f"wheel {e['wheel']} at t = {e['t_s']:.4f} s, x = {e['x_m']:.2f} m for "
-        f"{e['duration_s'] * 1e3:.2f} ms" for e in events[:5])
+        f"{e['duration_s'] * 1e3:.2f} ms"
+        for e in events[:5]
+    )
     more = f" (and {n_events - 5} more)" if n_events > 5 else ""
     return f"loss of wheel–rail contact, {n_events} event(s): {shown}{more}"

@@ -21,22 +21,38 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                 "--disable-component-update", "--no-first-run"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--no-first-run",
+]
 CHEAP_QUERY = "preset=single_bogie&train.speed_kmh=100&numerics.n_depths=11"
-PLOT_TITLES = ("Sleeper (block) displacement", "Invert load", "Invert line-load PSD",
-               "Interface displacement PSD", "Peak dynamic displacement against depth")
-STAGE_OF_PLOT = {"Sleeper (block) displacement": "vehicle_track", "Invert load": "vehicle_track",
-                 "Invert line-load PSD": "load", "Interface displacement PSD": "soil",
-                 "Peak dynamic displacement against depth": "soil"}
+PLOT_TITLES = (
+    "Sleeper (block) displacement",
+    "Invert load",
+    "Invert line-load PSD",
+    "Interface displacement PSD",
+    "Peak dynamic displacement against depth",
+)
+STAGE_OF_PLOT = {
+    "Sleeper (block) displacement": "vehicle_track",
+    "Invert load": "vehicle_track",
+    "Invert line-load PSD": "load",
+    "Interface displacement PSD": "soil",
+    "Peak dynamic displacement against depth": "soil",
+}
 SERVER_START_S = 90.0  # cold imports on a busy 2-core machine
 RUN_WAIT_MS = 120_000  # a page action that runs the pipeline
 
 pytestmark = [
     pytest.mark.browser,
     pytest.mark.slow,
-    pytest.mark.skipif(not CHROMIUM.exists(),
-                       reason="Debian Chromium (/usr/bin/chromium) is not installed"),
+    pytest.mark.skipif(
+        not CHROMIUM.exists(), reason="Debian Chromium (/usr/bin/chromium) is not installed"
+    ),
 ]
 
 # Every Bokeh figure on the page: title, number of data points drawn and a data signature (the
@@ -77,8 +93,19 @@ def free_port() -> int:
 def serve_app(log_path: Path) -> Iterator[str]:
     """Run ``panel serve dashboard/app.py`` on a free port; yield the app's URL."""
     port = free_port()
-    command = [sys.executable, "-m", "panel", "serve", "dashboard/app.py", "--port", str(port),
-               "--address", "127.0.0.1", "--allow-websocket-origin", f"127.0.0.1:{port}"]
+    command = [
+        sys.executable,
+        "-m",
+        "panel",
+        "serve",
+        "dashboard/app.py",
+        "--port",
+        str(port),
+        "--address",
+        "127.0.0.1",
+        "--allow-websocket-origin",
+        f"127.0.0.1:{port}",
+    ]
     with log_path.open("w") as log:
         process = subprocess.Popen(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
         try:
@@ -86,8 +113,10 @@ def serve_app(log_path: Path) -> Iterator[str]:
             while True:
                 if process.poll() is not None:
                     raise RuntimeError(f"panel serve exited: {log_path.read_text()}")
-                with contextlib.suppress(OSError), socket.create_connection(
-                        ("127.0.0.1", port), timeout=1):
+                with (
+                    contextlib.suppress(OSError),
+                    socket.create_connection(("127.0.0.1", port), timeout=1),
+                ):
                     break
                 if time.monotonic() > deadline:
                     raise RuntimeError(f"panel serve did not answer: {log_path.read_text()}")
@@ -118,7 +147,9 @@ def wait_for_plots(page, timeout_ms: float = RUN_WAIT_MS) -> list[dict]:
         f"""() => {{
           const shown = ({FIGURES_JS})().filter(f => f.points > 0).map(f => f.title);
           return {list(PLOT_TITLES)!r}.every(t => shown.includes(t));
-        }}""", timeout=timeout_ms)
+        }}""",
+        timeout=timeout_ms,
+    )
     return figures(page)
 
 
@@ -127,14 +158,18 @@ def signatures(page) -> dict[str, float]:
     return {f["title"]: f["signature"] for f in figures(page)}
 
 
-def wait_for_new_data(page, before: dict[str, float], titles,
-                      timeout_ms: float = RUN_WAIT_MS) -> None:
+def wait_for_new_data(
+    page, before: dict[str, float], titles, timeout_ms: float = RUN_WAIT_MS
+) -> None:
     """Wait until each figure in ``titles`` shows data other than in ``before``."""
     page.wait_for_function(
         f"""([before, titles]) => {{
           const now = Object.fromEntries(({FIGURES_JS})().map(f => [f.title, f.signature]));
           return titles.every(t => t in now && now[t] !== before[t]);
-        }}""", arg=[before, list(titles)], timeout=timeout_ms)
+        }}""",
+        arg=[before, list(titles)],
+        timeout=timeout_ms,
+    )
 
 
 def render_counts(page) -> dict[str, int]:
@@ -148,13 +183,16 @@ def render_counts(page) -> dict[str, int]:
 def wait_for_renders(page, stage: str, count: int, timeout_ms: float = RUN_WAIT_MS) -> None:
     """Wait until the plots of ``stage`` have been drawn ``count`` times."""
     page.locator(f'.stage-status[data-stage="{stage}"][data-renders="{count}"]').wait_for(
-        timeout=timeout_ms)
+        timeout=timeout_ms
+    )
 
 
 def summary_values(page) -> dict[str, str]:
     """Key numbers as shown, by key."""
-    return {item.get_attribute("data-key"): item.inner_text()
-            for item in page.locator(".summary-pane .value, .soil-pane .value").all()}
+    return {
+        item.get_attribute("data-key"): item.inner_text()
+        for item in page.locator(".summary-pane .value, .soil-pane .value").all()
+    }
 
 
 def open_dashboard(page, url: str, query: str = CHEAP_QUERY) -> None:
@@ -201,8 +239,7 @@ def browser():
 
 @pytest.fixture
 def page(browser, app_url):
-    context = browser.new_context(viewport={"width": 1400, "height": 1000},
-                                  accept_downloads=True)
+    context = browser.new_context(viewport={"width": 1400, "height": 1000}, accept_downloads=True)
     page = context.new_page()
     open_dashboard(page, app_url)
     yield page
@@ -214,9 +251,17 @@ def test_every_plot_renders_with_data(page):
     assert set(PLOT_TITLES) <= set(shown)
     assert all(shown[title] > 10 for title in PLOT_TITLES), shown
     values = summary_values(page)
-    for key in ("peak_invert_force", "peak_block_disp", "peak_disp_invert", "peak_disp_11m",
-                "peak_disp_deepest", "soil_p_wave_speed", "soil_s_wave_speed",
-                "soil_lame_lambda", "soil_shear_modulus"):
+    for key in (
+        "peak_invert_force",
+        "peak_block_disp",
+        "peak_disp_invert",
+        "peak_disp_11m",
+        "peak_disp_deepest",
+        "soil_p_wave_speed",
+        "soil_s_wave_speed",
+        "soil_lame_lambda",
+        "soil_shear_modulus",
+    ):
         assert re.fullmatch(r"[-\d.e+]+ \S+", values[key]), (key, values.get(key))
     assert not page.locator(".error-alert").is_visible()
 
@@ -274,8 +319,9 @@ def test_exported_report_opens_offline_with_every_plot(page, browser, tmp_path):
 
     offline = browser.new_context(offline=True)
     network = []
-    offline.route(re.compile(r"^https?://"), lambda route: (network.append(route.request.url),
-                                                            route.abort()))
+    offline.route(
+        re.compile(r"^https?://"), lambda route: (network.append(route.request.url), route.abort())
+    )
     viewer = offline.new_page()
     viewer.goto(report.as_uri())
     shown = {f["title"]: f["points"] for f in wait_for_plots(viewer, timeout_ms=30_000)}

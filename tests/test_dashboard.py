@@ -88,12 +88,15 @@ def test_time_plots_show_the_pipeline_numbers_in_display_units(results):
     disp = _curves(plots.block_displacement_plot(results))
     assert set(disp) == {"Vehicle–track model", "Winkler beam (BOEF)"}
     assert disp["Vehicle–track model"].dimension_values(1).max() == pytest.approx(
-        summary["peak_block_disp_m"] * MM, rel=1e-12)
+        summary["peak_block_disp_m"] * MM, rel=1e-12
+    )
     assert disp["Winkler beam (BOEF)"].dimension_values(1).max() == pytest.approx(
-        results.vehicle_track.winkler_block_disp_m.max() * MM, rel=1e-12)
+        results.vehicle_track.winkler_block_disp_m.max() * MM, rel=1e-12
+    )
     load = plots.invert_load_plot(results)
     assert load.dimension_values(1).max() == pytest.approx(
-        summary["peak_invert_force_N"] / 1e3, rel=1e-12)
+        summary["peak_invert_force_N"] / 1e3, rel=1e-12
+    )
     assert load.dimensions()[0].pprint_label == "Time (s)"
     assert load.dimensions()[1].pprint_label.endswith("(kN)")
 
@@ -108,9 +111,11 @@ def test_psd_plots_are_positive_and_within_the_soil_frequency_limit(results):
     interface = plots.interface_psd_plot(results)
     f = interface.dimension_values(0)
     keep = (results.soil.f_hz > 0) & (results.soil.f_hz <= limit)
-    np.testing.assert_allclose(interface.dimension_values(1),
-                               results.soil.interface_psd[keep][np.isin(
-                                   results.soil.f_hz[keep], f)] * MM**2, rtol=1e-12)
+    np.testing.assert_allclose(
+        interface.dimension_values(1),
+        results.soil.interface_psd[keep][np.isin(results.soil.f_hz[keep], f)] * MM**2,
+        rtol=1e-12,
+    )
 
 
 def test_depth_plot_overlays_both_paper_series_separately(results):
@@ -129,8 +134,7 @@ def test_depth_plot_overlays_both_paper_series_separately(results):
 
 def test_reference_data_is_found_from_any_working_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert [s["label"] for s in plots.paper_reference()] == ["Paper Fig. 11",
-                                                             "Paper conclusions"]
+    assert [s["label"] for s in plots.paper_reference()] == ["Paper Fig. 11", "Paper conclusions"]
 
 
 def test_summary_items_are_the_summary_in_display_units(results):
@@ -149,8 +153,12 @@ def test_summary_items_are_the_summary_in_display_units(results):
 def test_app_builds_with_a_widget_for_every_parameter(dashboard):
     page = dashboard.template()
     assert isinstance(page, pn.template.BootstrapTemplate)
-    expected = {f"{section}.{name}" for section in SECTIONS
-                for name in getattr(dashboard.scenario, section).param if name != "name"}
+    expected = {
+        f"{section}.{name}"
+        for section in SECTIONS
+        for name in getattr(dashboard.scenario, section).param
+        if name != "name"
+    }
     assert set(dashboard.widgets) == expected - HIDDEN
     assert set(PRIMARY) <= set(dashboard.widgets)
     pn.Row(dashboard).get_root()  # the whole layout renders to Bokeh models
@@ -164,8 +172,11 @@ def test_groups_hold_every_other_parameter_and_render_when_opened(dashboard):
         assert card.collapsed and not card.objects
         card.collapsed = False
         grouped[card.title] = [w for w in card.objects if w in dashboard.widgets.values()]
-    in_groups = {path for path, w in dashboard.widgets.items()
-                 if any(w in members for members in grouped.values())}
+    in_groups = {
+        path
+        for path, w in dashboard.widgets.items()
+        if any(w in members for members in grouped.values())
+    }
     assert in_groups == set(dashboard.widgets) - set(PRIMARY)
     assert dashboard.train_type in cards[0].objects
     assert dashboard.widgets["soil.poisson_ratio"] in grouped["Soil"]
@@ -180,8 +191,10 @@ def test_widgets_take_label_range_and_value_from_the_params(dashboard):
         assert widget.label == p.label, path
         if hasattr(widget, "start") and p.softbounds is not None:
             value = getattr(obj, name)
-            assert (widget.start, widget.end) == (min(p.softbounds[0], value),
-                                                  max(p.softbounds[1], value)), path
+            assert (widget.start, widget.end) == (
+                min(p.softbounds[0], value),
+                max(p.softbounds[1], value),
+            ), path
             assert widget.value == value, path
 
 
@@ -334,12 +347,15 @@ def test_scenario_save_and_load_round_trip(dashboard):
     assert dashboard.results.scenario.train.speed_kmh == 95.0
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"{not json", "Expecting property name"),
-    (json.dumps({"soil": {"youngs_modulus": -1.0}}).encode(), "outside the allowed range"),
-    (json.dumps({"spaceship": {}}).encode(), "unknown section"),
-    (b"[1, 2]", "Could not load bad.json"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"{not json", "Expecting property name"),
+        (json.dumps({"soil": {"youngs_modulus": -1.0}}).encode(), "outside the allowed range"),
+        (json.dumps({"spaceship": {}}).encode(), "unknown section"),
+        (b"[1, 2]", "Could not load bad.json"),
+    ],
+)
 def test_a_bad_scenario_file_gives_a_clear_message(dashboard, content, message):
     before = dashboard.scenario.to_json()
     dashboard.load_input.param.update(filename="bad.json", value=content)
@@ -349,14 +365,15 @@ def test_a_bad_scenario_file_gives_a_clear_message(dashboard, content, message):
 
 
 def test_query_arguments_choose_preset_and_overrides(cache):
-    board = Dashboard.from_query({"preset": [b"single_bogie"], "train.speed_kmh": [b"70"],
-                                  "numerics.n_depths": [b"11"]}, cache=cache)
+    board = Dashboard.from_query(
+        {"preset": [b"single_bogie"], "train.speed_kmh": [b"70"], "numerics.n_depths": [b"11"]},
+        cache=cache,
+    )
     assert board.preset_select.value == "single_bogie"
     assert board.scenario.train.single_bogie and board.scenario.train.speed_kmh == 70.0
     assert board.widgets["train.speed_kmh"].value == 70.0
     assert not board.error_alert.visible
-    bad = Dashboard.from_query({"preset": [b"nope"], "soil.youngs_modulus": [b"-3"]},
-                               cache=cache)
+    bad = Dashboard.from_query({"preset": [b"nope"], "soil.youngs_modulus": [b"-3"]}, cache=cache)
     text = bad.error_alert.object.replace("\\", "")
     assert "unknown preset 'nope'" in text and "youngs_modulus" in text
     assert bad.preset_select.value == "paper"
@@ -365,8 +382,9 @@ def test_query_arguments_choose_preset_and_overrides(cache):
 # ---- export.py ------------------------------------------------------------------------------
 # A tag that loads from the network; (Bokeh's own script text mentions a MathJax URL that it
 # fetches only for LaTeX labels, which the report has none of.)
-EXTERNAL_TAG = re.compile(r"""<(?:script|link|img)\b[^>]*(?:src|href)\s*=\s*["']?(?:https?:)?//""",
-                          re.IGNORECASE)
+EXTERNAL_TAG = re.compile(
+    r"""<(?:script|link|img)\b[^>]*(?:src|href)\s*=\s*["']?(?:https?:)?//""", re.IGNORECASE
+)
 
 
 def _markup_texts(report: str) -> list[str]:
@@ -395,8 +413,13 @@ def test_report_is_self_contained_and_complete(results):
     assert not EXTERNAL_TAG.search(text), EXTERNAL_TAG.search(text)
     assert '"name":"ImportedStyleSheet"' not in text and '"name":"InlineStyleSheet"' in text
     assert "cdn.holoviz.org" not in text
-    for title in ("Sleeper (block) displacement", "Invert load", "Invert line-load PSD",
-                  "Interface displacement PSD", "Peak dynamic displacement against depth"):
+    for title in (
+        "Sleeper (block) displacement",
+        "Invert load",
+        "Invert line-load PSD",
+        "Interface displacement PSD",
+        "Peak dynamic displacement against depth",
+    ):
         assert title in text, title
     shown = "".join(_markup_texts(text))
     for item in plots.summary_items(results):
@@ -420,16 +443,34 @@ def test_report_download_button_serves_the_report(dashboard):
 
 def test_export_command_line_writes_the_report(tmp_path, capsys):
     out = tmp_path / "report.html"
-    code = export_main(["--preset", "single_bogie", "--set", "train.speed_kmh=100",
-                        "--set", "numerics.n_depths=11", "--out", str(out)])
+    code = export_main(
+        [
+            "--preset",
+            "single_bogie",
+            "--set",
+            "train.speed_kmh=100",
+            "--set",
+            "numerics.n_depths=11",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0 and out.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
     assert str(out) in capsys.readouterr().out
 
 
 def test_export_command_line_refuses_bad_input(tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:
-        export_main(["--preset", "single_bogie", "--set", "soil.youngs_modulus=-1",
-                     "--out", str(tmp_path / "r.html")])
+        export_main(
+            [
+                "--preset",
+                "single_bogie",
+                "--set",
+                "soil.youngs_modulus=-1",
+                "--out",
+                str(tmp_path / "r.html"),
+            ]
+        )
     assert stop.value.code == 2
     assert "youngs_modulus" in capsys.readouterr().err
     assert not (tmp_path / "r.html").exists()

@@ -43,7 +43,8 @@ def free_vibration(t, omega, zeta, x0, v0):
     """Exact damped free vibration, ζ < 1."""
     omega_d = omega * math.sqrt(1.0 - zeta**2)
     return np.exp(-zeta * omega * t) * (
-        x0 * np.cos(omega_d * t) + (v0 + zeta * omega * x0) / omega_d * np.sin(omega_d * t))
+        x0 * np.cos(omega_d * t) + (v0 + zeta * omega * x0) / omega_d * np.sin(omega_d * t)
+    )
 
 
 def forced_from_rest(t, omega, zeta, amplitude, forcing_omega):
@@ -51,8 +52,9 @@ def forced_from_rest(t, omega, zeta, amplitude, forcing_omega):
     receptance = amplitude / complex(omega**2 - forcing_omega**2, 2 * zeta * omega * forcing_omega)
     phase = forcing_omega * t
     steady = receptance.real * np.sin(phase) + receptance.imag * np.cos(phase)
-    return steady + free_vibration(t, omega, zeta, -receptance.imag,
-                                   -receptance.real * forcing_omega)
+    return steady + free_vibration(
+        t, omega, zeta, -receptance.imag, -receptance.real * forcing_omega
+    )
 
 
 def observed_order(steps_per_period, errors):
@@ -87,8 +89,9 @@ def test_forced_vibration_matches_exact_solution_to_second_order():
     errors = []
     for n in per_period:
         dt = 1.0 / n
-        x, _ = zhai_sdof(OMEGA, zeta, dt, 5 * n, x0=0.0, v0=0.0,
-                         force=lambda t: math.sin(forcing_omega * t))
+        x, _ = zhai_sdof(
+            OMEGA, zeta, dt, 5 * n, x0=0.0, v0=0.0, force=lambda t: math.sin(forcing_omega * t)
+        )
         t = dt * np.arange(x.size)
         errors.append(np.max(np.abs(x - forced_from_rest(t, OMEGA, zeta, 1.0, forcing_omega))))
     assert errors[2] < 1e-4

@@ -43,6 +43,7 @@ def one_period_grid(n_components, n_points, wavelength_band_m=DEFAULT_BAND):
 
 # ---- FRA PSD --------------------------------------------------------------------------------
 
+
 def test_fra_psd_hand_values():
     """S(Ω) = k A Ω_c²/(Ω²(Ω² + Ω_c²)) cm²/(rad/m), worked by hand with k = 0.25.
 
@@ -85,6 +86,7 @@ def test_fra_psd_refuses_nonpositive_wavenumber(omega):
 
 # ---- variance of the synthesised profile -----------------------------------------------------
 
+
 def test_band_integral_closed_form_matches_quad_and_model_md_rms():
     """Closed-form band integral = scipy quad; class 6 over 1–50 m gives RMS 2.30 mm.
 
@@ -93,10 +95,15 @@ def test_band_integral_closed_form_matches_quad_and_model_md_rms():
     """
     for track_class, amplitude in [(1, 1.2107), (6, 0.0339)]:
         lo, hi = 2 * math.pi / 50.0, 2 * math.pi / 1.0
-        quad_value, _ = integrate.quad(lambda om, c=track_class: float(fra_psd(om, c)), lo, hi,
-                                       epsabs=0.0, epsrel=1e-12, limit=200)
-        assert band_variance_exact(amplitude, DEFAULT_BAND) == pytest.approx(quad_value,
-                                                                             rel=1e-9)
+        quad_value, _ = integrate.quad(
+            lambda om, c=track_class: float(fra_psd(om, c)),
+            lo,
+            hi,
+            epsabs=0.0,
+            epsrel=1e-12,
+            limit=200,
+        )
+        assert band_variance_exact(amplitude, DEFAULT_BAND) == pytest.approx(quad_value, rel=1e-9)
     rms_class6 = math.sqrt(band_variance_exact(0.0339, DEFAULT_BAND))
     assert rms_class6 == pytest.approx(2.3e-3, abs=0.05e-3)
 
@@ -151,8 +158,7 @@ def test_welch_psd_follows_fra_psd_across_band():
     estimates = []
     for seed in range(16):
         eta = synthesize_profile(x, 6, seed)
-        freq_cycles_per_m, psd_per_cycle = signal.welch(eta, fs=1 / spacing_welch_m,
-                                                        nperseg=4096)
+        freq_cycles_per_m, psd_per_cycle = signal.welch(eta, fs=1 / spacing_welch_m, nperseg=4096)
         estimates.append(psd_per_cycle / (2 * math.pi))  # m²/(cycle/m) → m²/(rad/m)
     omega = 2 * math.pi * freq_cycles_per_m
     estimate = np.mean(estimates, axis=0)
@@ -169,6 +175,7 @@ def test_welch_psd_follows_fra_psd_across_band():
 
 
 # ---- synthesis: determinism, grids, inputs ---------------------------------------------------
+
 
 def test_same_seed_same_profile_other_seed_differs():
     x = np.linspace(0.0, 300.0, 6001)
@@ -237,6 +244,7 @@ def test_synthesize_profile_refuses_bad_input(kwargs, message):
 
 # ---- measured profiles ----------------------------------------------------------------------
 
+
 def write(tmp_path, text, name="profile.csv"):
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
@@ -288,6 +296,7 @@ def test_example_profile_asset_loads_and_covers_default_rail():
 
 # ---- dispatch -------------------------------------------------------------------------------
 
+
 def test_profile_for_disabled_is_zero():
     x = np.linspace(0.0, 100.0, 201)
     eta = profile_for(Irregularity(enabled=False), x)
@@ -295,8 +304,9 @@ def test_profile_for_disabled_is_zero():
 
 
 def test_profile_for_synthetic_uses_all_settings():
-    irregularity = Irregularity(track_class=4, seed=99, wavelength_min=2.0, wavelength_max=30.0,
-                                n_components=300)
+    irregularity = Irregularity(
+        track_class=4, seed=99, wavelength_min=2.0, wavelength_max=30.0, n_components=300
+    )
     x = np.arange(0.0, 200.0, 0.01)
     expected = synthesize_profile(x, 4, 99, (2.0, 30.0), 300)
     assert np.array_equal(profile_for(irregularity, x), expected)

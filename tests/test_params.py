@@ -94,11 +94,14 @@ def test_unknown_names_are_refused():
         Scenario.preset("nope")
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("[1]", "a scenario must be an object of sections, not list"),
-    ('{"train": 5}', "section 'train' must be an object of parameters, not int"),
-    ("{", "Expecting property name"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[1]", "a scenario must be an object of sections, not list"),
+        ('{"train": 5}', "section 'train' must be an object of parameters, not int"),
+        ("{", "Expecting property name"),
+    ],
+)
 def test_malformed_scenario_json_is_a_value_error(text, message):
     with pytest.raises(ValueError, match=message):
         Scenario.from_json(text)
@@ -139,8 +142,9 @@ def test_constructor_arguments_are_checked_with_the_same_message():
 
 
 @pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf")])
-@pytest.mark.parametrize(("cls", "name", "p"),
-                         [c for c in _bounded_parameters() if isinstance(c.values[2], Quantity)])
+@pytest.mark.parametrize(
+    ("cls", "name", "p"), [c for c in _bounded_parameters() if isinstance(c.values[2], Quantity)]
+)
 def test_non_finite_values_are_refused_everywhere(cls, name, p, bad):
     with pytest.raises(ValueError, match=rf"^{cls.__name__}\.{name} = .* allowed range"):
         setattr(cls(), name, bad)
@@ -163,6 +167,7 @@ def test_dotted_set_parses_and_refuses():
 
 
 # ---- derived quantities against hand values -------------------------------------------------
+
 
 def test_static_wheel_load_from_table_1():
     """(38 500 + 2·2 980 + 4·1 350) kg · 9.81 / 8 wheels = 61.14 kN (MODEL.md: 61.1 kN)."""

@@ -39,8 +39,9 @@ def test_result_fields_have_the_documented_shapes(results):
 
 def test_line_load_is_the_coupling_rule_of_the_model_sheet(results):
     """q = 2 F_b / L_s exactly (MODEL.md §6)."""
-    np.testing.assert_allclose(results.load.line_load_N_per_m,
-                               2 * results.vehicle_track.block_force_N / 0.6, rtol=1e-15)
+    np.testing.assert_allclose(
+        results.load.line_load_N_per_m, 2 * results.vehicle_track.block_force_N / 0.6, rtol=1e-15
+    )
 
 
 def test_units_and_magnitudes_are_physical(results):
@@ -113,7 +114,8 @@ def test_progress_reports_each_stage_in_order_from_zero_to_one(cheap_scenario):
     run(cheap_scenario(), progress=lambda stage, f: calls.append((stage, f)), cache=None)
     stages = [stage for stage, _ in calls]
     assert [s for i, s in enumerate(stages) if i == 0 or stages[i - 1] != s] == list(
-        pipeline.STAGES)
+        pipeline.STAGES
+    )
     for stage in pipeline.STAGES:
         fractions = [f for s, f in calls if s == stage]
         assert fractions[0] == 0.0 and fractions[-1] == 1.0
@@ -166,8 +168,14 @@ def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch, ch
 
 # ---- command line ---------------------------------------------------------------------------
 
-CHEAP_SET = ["--preset", "single_bogie", "--set", "train.speed_kmh=100",
-             "--set", "numerics.n_depths=11"]
+CHEAP_SET = [
+    "--preset",
+    "single_bogie",
+    "--set",
+    "train.speed_kmh=100",
+    "--set",
+    "numerics.n_depths=11",
+]
 
 
 def test_cli_writes_readable_files(tmp_path, capsys):
@@ -205,8 +213,12 @@ def test_cli_refuses_a_bad_set_with_a_clear_message(tmp_path, capsys, override, 
 
 def test_cli_runs_as_a_module(tmp_path):
     """The real entry point, in a fresh interpreter (Numba's on-disk cache keeps it quick)."""
-    done = subprocess.run([sys.executable, "-m", "model", *CHEAP_SET, "--quiet",
-                           "--out", str(tmp_path)], cwd=ROOT, capture_output=True, text=True,
-                          timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "model", *CHEAP_SET, "--quiet", "--out", str(tmp_path)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "summary.json").exists()

@@ -34,8 +34,10 @@ def synthetic_train_load(scenario, duration_s=None):
 def gauss_panels(edges):
     """Nodes and weights of 8-point Gauss–Legendre on each panel [edges[k], edges[k+1]]."""
     low, high = edges[:-1, None], edges[1:, None]
-    return ((0.5 * (high - low) * GAUSS_X + 0.5 * (high + low)).ravel(),
-            (0.5 * (high - low) * GAUSS_W).ravel())
+    return (
+        (0.5 * (high - low) * GAUSS_X + 0.5 * (high + low)).ravel(),
+        (0.5 * (high - low) * GAUSS_W).ravel(),
+    )
 
 
 def pulse_train_displacement(t_s, times, impulse, sigma, depth, tunnel, soil, n_harmonics):
@@ -50,10 +52,12 @@ def pulse_train_displacement(t_s, times, impulse, sigma, depth, tunnel, soil, n_
     f_a, w_a = gauss_panels(np.geomspace(f_low, 1.0, 41))
     f_b, w_b = gauss_panels(np.arange(1.0, 30.0 + 1e-9, 0.05))
     freq, weight = np.concatenate([f_a, f_b]), np.concatenate([w_a, w_b])
-    h = invert_receptance(np.concatenate([[f_low / np.e], freq]), depth, tunnel, soil,
-                          n_harmonics)
-    load = (impulse * np.exp(-2 * (np.pi * sigma * freq) ** 2)
-            * np.exp(-2j * np.pi * np.outer(freq, np.atleast_1d(times))).sum(axis=1))
+    h = invert_receptance(np.concatenate([[f_low / np.e], freq]), depth, tunnel, soil, n_harmonics)
+    load = (
+        impulse
+        * np.exp(-2 * (np.pi * sigma * freq) ** 2)
+        * np.exp(-2j * np.pi * np.outer(freq, np.atleast_1d(times))).sum(axis=1)
+    )
     lowest_band = f_low * h[0] * impulse * np.size(times)
     oscillation = np.exp(2j * np.pi * np.outer(freq, t_s))
     return 2 * np.real(lowest_band[:, None] + (h[1:] * (weight * load)[:, None]).T @ oscillation)
@@ -75,13 +79,16 @@ def test_single_pulse_response_converges_to_direct_fourier_integration(shear_los
     pads = np.array([8, 32, 128])
     errors = []
     for pad in pads:
-        result = soil_response(load, dt, tunnel, soil,
-                               Numerics(zero_pad_factor=int(pad), n_depths=3, max_depth=20.0))
+        result = soil_response(
+            load, dt, tunnel, soil, Numerics(zero_pad_factor=int(pad), n_depths=3, max_depth=20.0)
+        )
         every = slice(None, None, 4)
-        reference = pulse_train_displacement(result.t_s[every], t0, impulse, sigma,
-                                             result.depth_m, tunnel, soil, 32)
-        errors.append(np.max(np.abs(result.disp_m[:, every] - reference))
-                      / np.max(np.abs(reference)))
+        reference = pulse_train_displacement(
+            result.t_s[every], t0, impulse, sigma, result.depth_m, tunnel, soil, 32
+        )
+        errors.append(
+            np.max(np.abs(result.disp_m[:, every] - reference)) / np.max(np.abs(reference))
+        )
     order = -np.polyfit(np.log(pads), np.log(errors), 1)[0]
     assert 1.0 < order < 1.8
     assert errors[1] < 1e-3
@@ -96,9 +103,10 @@ def test_constant_hysteretic_damping_is_not_causal_but_elasticity_is():
     peak_time = np.linspace(t0 - sigma, t0 + 2 * sigma, 60)
     for loss, low, high in ((0.0, 0.0, 1e-5), (0.06, 0.005, 0.03)):
         soil = Soil(shear_loss_factor=loss)
-        u = pulse_train_displacement(np.concatenate([early, peak_time]), t0, 1.0, sigma,
-                                     [0.0], tunnel, soil, 32)[0]
-        precursor = np.max(np.abs(u[:early.size])) / np.max(u)
+        u = pulse_train_displacement(
+            np.concatenate([early, peak_time]), t0, 1.0, sigma, [0.0], tunnel, soil, 32
+        )[0]
+        precursor = np.max(np.abs(u[: early.size])) / np.max(u)
         assert low <= precursor < high, (loss, precursor)
 
 
@@ -121,9 +129,12 @@ def test_train_peak_converges_with_padding_to_the_direct_integral():
     reference = []
     for row, depth in enumerate(result.depth_m):
         peak_index = int(np.argmax(result.disp_m[row]))
-        window = result.t_s[max(peak_index - 40, 0):peak_index + 40]
-        reference.append(pulse_train_displacement(window, times, impulse, sigma, [depth],
-                                                   tunnel, soil, numerics.n_harmonics).max())
+        window = result.t_s[max(peak_index - 40, 0) : peak_index + 40]
+        reference.append(
+            pulse_train_displacement(
+                window, times, impulse, sigma, [depth], tunnel, soil, numerics.n_harmonics
+            ).max()
+        )
     errors = np.abs(np.array(peaks) / np.array(reference) - 1)
     assert np.all(np.diff(errors, axis=0) < 0)
     for column in errors.T:
@@ -138,9 +149,12 @@ def test_train_peak_converges_in_harmonics():
     scenario = Scenario.paper()
     dt, _, load, *_ = synthetic_train_load(scenario)
     counts = np.array([8, 16, 32, 64])
-    peaks = [soil_response(load, dt, scenario.tunnel, scenario.soil,
-                           Numerics(n_harmonics=int(n), n_depths=3)).peak_disp_m
-             for n in (*counts, 128)]
+    peaks = [
+        soil_response(
+            load, dt, scenario.tunnel, scenario.soil, Numerics(n_harmonics=int(n), n_depths=3)
+        ).peak_disp_m
+        for n in (*counts, 128)
+    ]
     changes = np.array([np.max(np.abs(p / peaks[-1] - 1)) for p in peaks[:-1]])
     order = -np.polyfit(np.log(counts), np.log(changes), 1)[0]
     assert 2.5 < order < 3.5
@@ -153,8 +167,7 @@ def band_average(half_width, depth, tunnel, soil, n_harmonics):
     where (ωr/c)² < 4e-7, H = A + B ln f to that accuracy and the band integral is f H(f/e)."""
     f_low = half_width / 100
     freq, weight = gauss_panels(np.geomspace(f_low, half_width, 31))
-    h = invert_receptance(np.concatenate([[f_low / np.e], freq]), depth, tunnel, soil,
-                          n_harmonics)
+    h = invert_receptance(np.concatenate([[f_low / np.e], freq]), depth, tunnel, soil, n_harmonics)
     return (f_low * h[0] + weight @ h[1:]).real / half_width
 
 
@@ -166,9 +179,16 @@ def test_dc_bin_receptance_is_the_band_average(soil_name):
     soil = Soil() if soil_name == "paper" else Scenario.paper_soil_lame().soil
     tunnel, depth = Tunnel(), np.array([0.0, 11.0, 35.0])
     half_widths = np.array([0.5 / 53.3, 0.5 / 213.0])
-    errors = [np.max(np.abs(dc_band_receptance(h, depth, tunnel, soil, 32)
-                            / band_average(h, depth, tunnel, soil, 32) - 1))
-              for h in half_widths]
+    errors = [
+        np.max(
+            np.abs(
+                dc_band_receptance(h, depth, tunnel, soil, 32)
+                / band_average(h, depth, tunnel, soil, 32)
+                - 1
+            )
+        )
+        for h in half_widths
+    ]
     assert errors[0] < 2e-4
     if soil_name == "paper":  # the stiff soil is already at the 1e-7 rounding floor
         order = np.log(errors[0] / errors[1]) / np.log(half_widths[0] / half_widths[1])
@@ -189,16 +209,21 @@ def test_decimation_in_frequency_equals_sampling_at_the_output_rate():
     fine_result = soil_response(fine, fine_dt, scenario.tunnel, scenario.soil, numerics)
     coarse_result = soil_response(coarse, coarse_dt, scenario.tunnel, scenario.soil, numerics)
     np.testing.assert_allclose(fine_result.t_s, coarse_result.t_s, rtol=1e-12)
-    np.testing.assert_allclose(fine_result.disp_m, coarse_result.disp_m, rtol=0,
-                               atol=1e-9 * np.max(fine_result.disp_m))
+    np.testing.assert_allclose(
+        fine_result.disp_m, coarse_result.disp_m, rtol=0, atol=1e-9 * np.max(fine_result.disp_m)
+    )
 
 
 @pytest.fixture(scope="module")
 def paper_result():
     scenario = Scenario.paper()
     dt, _, load, *_ = synthetic_train_load(scenario)
-    return scenario, load, dt, soil_response(load, dt, scenario.tunnel, scenario.soil,
-                                             scenario.numerics)
+    return (
+        scenario,
+        load,
+        dt,
+        soil_response(load, dt, scenario.tunnel, scenario.soil, scenario.numerics),
+    )
 
 
 def test_outputs_have_the_documented_shapes_grids_and_spectra(paper_result):
@@ -222,12 +247,14 @@ def test_outputs_have_the_documented_shapes_grids_and_spectra(paper_result):
     assert f[0] == 0.0 and f[-1] <= numerics.soil_max_frequency
     n_fft = round(1 / (f[1] * dt))
     load_f, load_spectrum = fourier_transform(load, dt, n_fft)
-    np.testing.assert_allclose(result.line_load_amplitude_N_per_m_per_hz,
-                               np.abs(load_spectrum[:f.size]), rtol=1e-12)
+    np.testing.assert_allclose(
+        result.line_load_amplitude_N_per_m_per_hz, np.abs(load_spectrum[: f.size]), rtol=1e-12
+    )
     bins = np.array([1, 100, 2000])
     h = invert_receptance(f[bins], 0.0, scenario.tunnel, scenario.soil, numerics.n_harmonics)
-    np.testing.assert_allclose(result.interface_amplitude_m_per_hz[bins],
-                               np.abs(h[:, 0] * load_spectrum[bins]), rtol=1e-12)
+    np.testing.assert_allclose(
+        result.interface_amplitude_m_per_hz[bins], np.abs(h[:, 0] * load_spectrum[bins]), rtol=1e-12
+    )
 
 
 def test_paper_case_peaks_regression_pin(paper_result):
@@ -235,19 +262,24 @@ def test_paper_case_peaks_regression_pin(paper_result):
     loads on a Winkler track, no irregularity). The direct-integral test bounds their error
     (≤ 1 % low); the pin only guards against unnoticed changes (rtol 1e-6)."""
     _, _, _, result = paper_result
-    at = {depth: result.peak_disp_m[np.argmin(np.abs(result.depth_m - depth))]
-          for depth in (0.0, 11.0, 35.0)}
+    at = {
+        depth: result.peak_disp_m[np.argmin(np.abs(result.depth_m - depth))]
+        for depth in (0.0, 11.0, 35.0)
+    }
     assert at[0.0] == pytest.approx(7.852733e-3, rel=1e-6, abs=0)
     assert at[11.0] == pytest.approx(4.866645e-3, rel=1e-6, abs=0)
     assert at[35.0] == pytest.approx(3.220132e-3, rel=1e-6, abs=0)
 
 
-@pytest.mark.parametrize(("load", "dt", "numerics", "message"), [
-    ([1.0, np.nan, 2.0], 1e-3, Numerics(), r"NaN"),
-    ([1.0, 2.0, 3.0], 0.0, Numerics(), r"dt_s = 0\.0 is outside"),
-    (np.ones((3, 3)), 1e-3, Numerics(), r"1-D record"),
-    (np.ones(100), 1e-4, Numerics(soil_max_frequency=1.0), r"soil_max_frequency = 1 Hz"),
-])
+@pytest.mark.parametrize(
+    ("load", "dt", "numerics", "message"),
+    [
+        ([1.0, np.nan, 2.0], 1e-3, Numerics(), r"NaN"),
+        ([1.0, 2.0, 3.0], 0.0, Numerics(), r"dt_s = 0\.0 is outside"),
+        (np.ones((3, 3)), 1e-3, Numerics(), r"1-D record"),
+        (np.ones(100), 1e-4, Numerics(soil_max_frequency=1.0), r"soil_max_frequency = 1 Hz"),
+    ],
+)
 def test_bad_input_is_refused_with_a_message_naming_it(load, dt, numerics, message):
     with pytest.raises(ValueError, match=message):
         soil_response(load, dt, Tunnel(), Soil(), numerics)

@@ -10,8 +10,11 @@ def hann_weighted_mean_square(x, n_segment, hop=None):
     """Average over segments (hop default n/2) of Σ w²(x − x̄)² / Σ w², periodic Hann window."""
     window = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n_segment) / n_segment)
     starts = range(0, x.size - n_segment + 1, hop or n_segment // 2)
-    values = [np.sum(window**2 * (x[s:s + n_segment] - x[s:s + n_segment].mean()) ** 2)
-              / np.sum(window**2) for s in starts]
+    values = [
+        np.sum(window**2 * (x[s : s + n_segment] - x[s : s + n_segment].mean()) ** 2)
+        / np.sum(window**2)
+        for s in starts
+    ]
     return np.mean(values)
 
 
@@ -38,7 +41,8 @@ def test_segments_tile_the_whole_record(n_samples):
     x = np.random.default_rng(1).normal(size=n_samples)
     f_hz, psd = one_sided_psd(x, 1e-3, n_target * 1e-3)
     assert np.sum(psd) * (f_hz[1] - f_hz[0]) == pytest.approx(
-        hann_weighted_mean_square(x, n_segment, hop), rel=1e-12)
+        hann_weighted_mean_square(x, n_segment, hop), rel=1e-12
+    )
 
 
 def test_a_pulse_at_the_end_of_the_record_is_analysed():
@@ -84,7 +88,8 @@ def test_a_record_shorter_than_the_segment_is_analysed_whole():
     f_hz, psd = one_sided_psd(x, 0.01, 10.0)
     assert f_hz.size == 301 // 2 + 1
     assert np.sum(psd) * (f_hz[1] - f_hz[0]) == pytest.approx(
-        hann_weighted_mean_square(x, 301), rel=1e-12)
+        hann_weighted_mean_square(x, 301), rel=1e-12
+    )
 
 
 def test_fourier_transform_of_a_gaussian_pulse_matches_the_closed_form():
@@ -98,18 +103,26 @@ def test_fourier_transform_of_a_gaussian_pulse_matches_the_closed_form():
     x = amplitude * np.exp(-0.5 * ((t - t0) / sigma) ** 2)
     f_hz, spectrum = fourier_transform(x, dt, 4096)
     assert f_hz[1] == pytest.approx(1 / (4096 * dt))
-    expected = (amplitude * sigma * np.sqrt(2 * np.pi) * np.exp(-2 * (np.pi * sigma * f_hz) ** 2)
-                * np.exp(-2j * np.pi * f_hz * t0))
+    expected = (
+        amplitude
+        * sigma
+        * np.sqrt(2 * np.pi)
+        * np.exp(-2 * (np.pi * sigma * f_hz) ** 2)
+        * np.exp(-2j * np.pi * f_hz * t0)
+    )
     np.testing.assert_allclose(spectrum, expected, rtol=0, atol=1e-12 * np.abs(expected[0]))
 
 
-@pytest.mark.parametrize(("call", "message"), [
-    (lambda: one_sided_psd([1.0, 2.0, 3.0], 0.0, 1.0), r"dt_s = 0\.0 is outside"),
-    (lambda: one_sided_psd([1.0, np.nan, 3.0], 0.1, 1.0), r"NaN"),
-    (lambda: one_sided_psd(np.ones((3, 3)), 0.1, 1.0), r"1-D record"),
-    (lambda: one_sided_psd([1.0, 2.0, 3.0], 0.1, -1.0), r"segment_s = -1\.0 is outside"),
-    (lambda: fourier_transform([1.0, 2.0, 3.0], 0.1, 2), r"n_fft = 2 is shorter"),
-])
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: one_sided_psd([1.0, 2.0, 3.0], 0.0, 1.0), r"dt_s = 0\.0 is outside"),
+        (lambda: one_sided_psd([1.0, np.nan, 3.0], 0.1, 1.0), r"NaN"),
+        (lambda: one_sided_psd(np.ones((3, 3)), 0.1, 1.0), r"1-D record"),
+        (lambda: one_sided_psd([1.0, 2.0, 3.0], 0.1, -1.0), r"segment_s = -1\.0 is outside"),
+        (lambda: fourier_transform([1.0, 2.0, 3.0], 0.1, 2), r"n_fft = 2 is shorter"),
+    ],
+)
 def test_bad_input_is_refused_with_a_message_naming_it(call, message):
     with pytest.raises(ValueError, match=message):
         call()

@@ -65,7 +65,6 @@ def near_static_freq_hz(soil, tunnel):
     return 5e-4 * soil.s_wave_speed / (2 * np.pi * tunnel.ring_radius)
 
 
-
 @pytest.mark.parametrize("soil_name", ["undamped", "paper", "bulk_damped"])
 def test_uniform_pressure_on_empty_cavity_gives_lame_solution(soil_name):
     """n = 0, radial pressure p on a cavity: u_r = p a²/(2μ r) (plane strain, any r ≥ a).
@@ -81,7 +80,7 @@ def test_uniform_pressure_on_empty_cavity_gives_lame_solution(soil_name):
     shear, _ = complex_moduli(soil)
     field = harmonic_field(near_static_freq_hz(soil, tunnel), radius, tunnel, soil, 0)
     np.testing.assert_allclose(field.u_r[0], a**2 / (2 * shear * radius), rtol=2e-5)
-    np.testing.assert_allclose(field.sigma_rr[0], -(a / radius) ** 2, rtol=2e-5)
+    np.testing.assert_allclose(field.sigma_rr[0], -((a / radius) ** 2), rtol=2e-5)
     np.testing.assert_allclose(field.sigma_thetatheta[0], (a / radius) ** 2, rtol=2e-5)
 
 
@@ -97,8 +96,7 @@ def test_cos2theta_pressure_on_empty_cavity(soil_name):
     shear, lame = complex_moduli(soil)
     poisson = lame / (2 * (lame + shear))
     field = harmonic_field(near_static_freq_hz(soil, tunnel), a, tunnel, soil, 2)
-    np.testing.assert_allclose(field.u_r[0, 0], a / (2 * shear) * (5 / 3 - 2 * poisson),
-                               rtol=2e-5)
+    np.testing.assert_allclose(field.u_r[0, 0], a / (2 * shear) * (5 / 3 - 2 * poisson), rtol=2e-5)
     # Traction boundary condition of the empty cavity: σ_rr = −p, σ_rθ = 0 at r = a.
     assert field.sigma_rr[0, 0] == pytest.approx(-1.0, rel=1e-6)
     assert abs(field.sigma_rtheta[0, 0]) < 1e-6
@@ -168,8 +166,10 @@ def navier_residual(step, soil, tunnel):
     """max |μ∇²u + (λ+μ)∇(∇·u) + ρω²u| / max |ρω²u| over FD_POINTS, central differences."""
     shear, lame = complex_moduli(soil)
     omega2 = (2 * np.pi * FD_FREQ_HZ) ** 2
-    offsets = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1],
-                        [1, 1], [1, -1], [-1, 1], [-1, -1]]) * step
+    offsets = (
+        np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [1, -1], [-1, 1], [-1, -1]])
+        * step
+    )
     points = (FD_POINTS[:, None, :] + offsets[None]).reshape(-1, 2)
     u, _ = cartesian_field(FD_FREQ_HZ, points[:, 0], points[:, 1], tunnel, soil, 24)
     u = u.reshape(2, len(FD_POINTS), len(offsets))
@@ -216,9 +216,13 @@ def test_stresses_are_hookes_law_of_the_displacement_gradient():
     du_dx = (u[..., 1] - u[..., 2]) / (2 * step)
     du_dy = (u[..., 3] - u[..., 4]) / (2 * step)
     divergence = du_dx[0] + du_dy[1]
-    expected = np.array([lame * divergence + 2 * shear * du_dx[0],
-                         lame * divergence + 2 * shear * du_dy[1],
-                         shear * (du_dy[0] + du_dx[1])])
+    expected = np.array(
+        [
+            lame * divergence + 2 * shear * du_dx[0],
+            lame * divergence + 2 * shear * du_dy[1],
+            shear * (du_dy[0] + du_dx[1]),
+        ]
+    )
     scale = np.abs(stress).max(axis=0)
     assert np.all(np.abs(stress - expected) / scale < 1e-5)
 
@@ -254,8 +258,9 @@ def line_load_green_function(freq_hz, distance_m, soil):
     alpha = 1j * omega * np.sqrt(soil.density / (lame + 2 * shear))
     beta = 1j * omega * np.sqrt(soil.density / shear)
     r = np.asarray(distance_m)[None, :]
-    return ((beta * kv(1, beta * r) - alpha * kv(1, alpha * r)) / r
-            - alpha**2 * kv(0, alpha * r)) / (2 * np.pi * soil.density * omega**2)
+    return (
+        (beta * kv(1, beta * r) - alpha * kv(1, alpha * r)) / r - alpha**2 * kv(0, alpha * r)
+    ) / (2 * np.pi * soil.density * omega**2)
 
 
 def test_small_flexible_cavity_approaches_the_line_load_green_function():
@@ -302,8 +307,12 @@ def test_receptance_converges_in_harmonics_at_the_ring_bending_rate():
     tunnel, soil = Tunnel(), Soil()
     reference = invert_receptance(freq, depth, tunnel, soil, 512)
     counts = np.array([16, 32, 64, 128])
-    errors = np.array([np.abs(invert_receptance(freq, depth, tunnel, soil, n) / reference - 1)
-                       .max(axis=0) for n in counts])
+    errors = np.array(
+        [
+            np.abs(invert_receptance(freq, depth, tunnel, soil, n) / reference - 1).max(axis=0)
+            for n in counts
+        ]
+    )
     order = -np.polyfit(np.log(counts), np.log(errors[:, 0]), 1)[0]
     assert 2.7 < order < 3.3
     assert errors[1, 0] < 1e-3 and np.all(errors[1, 1:] < 1e-4)
@@ -340,14 +349,16 @@ def fe_harmonic(freq_hz, n, tunnel, soil, step=0.05, real_end=None):
     shear, lame = complex_moduli(soil)
     omega = 2 * np.pi * freq_hz
     p_wavenumber = omega / np.sqrt((lame + 2 * shear).real / soil.density)
-    nodes = fe_contour_nodes(a, a + 12.0 if real_end is None else real_end, step,
-                             1 / p_wavenumber, 1 + 2 * step)
+    nodes = fe_contour_nodes(
+        a, a + 12.0 if real_end is None else real_end, step, 1 / p_wavenumber, 1 + 2 * step
+    )
     n_dof = 2 * nodes.size
-    constitutive = np.array([[lame + 2 * shear, lame, 0], [lame, lame + 2 * shear, 0],
-                             [0, 0, shear]])
+    constitutive = np.array(
+        [[lame + 2 * shear, lame, 0], [lame, lame + 2 * shear, 0], [0, 0, shear]]
+    )
     rows, cols, values = [], [], []
     for e in range((nodes.size - 1) // 2):
-        element = nodes[2 * e:2 * e + 3]
+        element = nodes[2 * e : 2 * e + 3]
         r, jacobian = element @ SHAPE, element @ SHAPE_DERIV
         d_shape = SHAPE_DERIV / jacobian
         strain = np.zeros((GAUSS_X.size, 3, 6), dtype=complex)  # (ε_rr, ε_θθ, γ_rθ) per dof
@@ -369,15 +380,17 @@ def fe_harmonic(freq_hz, n, tunnel, soil, step=0.05, real_end=None):
     # Ring: energy ½∮[K ε² + D κ²] a dθ with ε = (nV + W)/a, κ = (1 − n²)W/a², minus kinetic.
     extensional, bending = tunnel.extensional_stiffness, tunnel.bending_stiffness
     membrane = np.array([1.0, n]) / a
-    ring = a * (extensional * np.outer(membrane, membrane)
-                + bending * np.diag([(1 - n * n) ** 2 / a**4, 0.0])
-                - omega**2 * tunnel.density * tunnel.thickness * np.eye(2))
+    ring = a * (
+        extensional * np.outer(membrane, membrane)
+        + bending * np.diag([(1 - n * n) ** 2 / a**4, 0.0])
+        - omega**2 * tunnel.density * tunnel.thickness * np.eye(2)
+    )
     rows.append(np.array([0, 0, 1, 1]))
     cols.append(np.array([0, 1, 0, 1]))
     values.append(ring.ravel())
     matrix = scipy.sparse.coo_matrix(
-        (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(n_dof, n_dof)).tocsc()[:-2, :-2]  # clamp the far end of the contour
+        (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))), shape=(n_dof, n_dof)
+    ).tocsc()[:-2, :-2]  # clamp the far end of the contour
     load = np.zeros(n_dof - 2, dtype=complex)
     load[0] = a  # work of the traction on the ring: ∮ p δW a dθ
     solution = scipy.sparse.linalg.spsolve(matrix, load)
@@ -418,8 +431,10 @@ def test_finite_element_model_converges_to_the_closed_form():
     steps = np.array([0.4, 0.2, 0.1, 0.05])
     for freq_hz, n in ((0.5, 1), (4.0, 2), (15.0, 6)):
         closed = harmonic_field(freq_hz, tunnel.ring_radius + FE_DEPTHS, tunnel, soil, n).u_r[0]
-        errors = [np.abs(fe_values_at(freq_hz, n, tunnel, soil, FE_DEPTHS, h) / closed - 1).max()
-                  for h in steps]
+        errors = [
+            np.abs(fe_values_at(freq_hz, n, tunnel, soil, FE_DEPTHS, h) / closed - 1).max()
+            for h in steps
+        ]
         order = np.polyfit(np.log(steps), np.log(errors), 1)[0]
         assert 3.0 < order < 4.5, (freq_hz, n, order)
 
@@ -432,8 +447,9 @@ def test_coupled_invert_receptance_matches_finite_element_sum():
     soil, tunnel = Soil(), Tunnel()
     n_harmonics, freq_hz = 16, 3.0
     coefficients = invert_load_coefficients(tunnel.ring_radius, n_harmonics)
-    fe = sum(c * fe_values_at(freq_hz, n, tunnel, soil, FE_DEPTHS)
-             for n, c in enumerate(coefficients))
+    fe = sum(
+        c * fe_values_at(freq_hz, n, tunnel, soil, FE_DEPTHS) for n, c in enumerate(coefficients)
+    )
     closed = invert_receptance(freq_hz, FE_DEPTHS, tunnel, soil, n_harmonics)[0]
     np.testing.assert_allclose(fe, closed, rtol=1e-4)
 
@@ -445,13 +461,15 @@ def test_ring_views_agree_with_the_receptance_and_each_other():
     soil, tunnel, n = Soil(), Tunnel(), 20
     freq, theta = np.array([0.8, 7.0]), np.array([0.0, 0.9, np.pi / 2, np.pi])
     w, v = ring_displacement(freq, theta, tunnel, soil, n)
-    np.testing.assert_allclose(w[:, 0], invert_receptance(freq, 0.0, tunnel, soil, n)[:, 0],
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        w[:, 0], invert_receptance(freq, 0.0, tunnel, soil, n)[:, 0], rtol=1e-12
+    )
     w_n, v_n = ring_displacement_harmonics(freq, tunnel, soil, n)
     orders = np.arange(n + 1)
     np.testing.assert_allclose(w, w_n @ np.cos(np.outer(orders, theta)), rtol=1e-12)
-    np.testing.assert_allclose(v, v_n @ np.sin(np.outer(orders, theta)), rtol=1e-12,
-                               atol=1e-12 * np.abs(v).max())
+    np.testing.assert_allclose(
+        v, v_n @ np.sin(np.outer(orders, theta)), rtol=1e-12, atol=1e-12 * np.abs(v).max()
+    )
 
 
 # ---- input errors ---------------------------------------------------------------------------
@@ -462,27 +480,40 @@ class LooseSoil(Soil):
     shear_loss_factor = param.Number(0.06, bounds=None, softbounds=None)
 
 
-@pytest.mark.parametrize(("call", "message"), [
-    (lambda: invert_receptance(0.0, 1.0, Tunnel(), Soil(), 8), r"freq_hz = 0\.0 .*\(0, inf\)"),
-    (lambda: invert_receptance([1.0, -2.0], 1.0, Tunnel(), Soil(), 8), r"freq_hz = -2\.0"),
-    (lambda: invert_receptance(np.nan, 1.0, Tunnel(), Soil(), 8), r"freq_hz contains nan"),
-    (lambda: invert_receptance(1.0, -0.1, Tunnel(), Soil(), 8), r"depth_m = -0\.1 is inside"),
-    (lambda: soil_field(1.0, 2.0, 0.0, Tunnel(), Soil(), 8), r"radius_m = 2\.0 is inside"),
-    (lambda: invert_receptance(1.0, 1.0, Tunnel(), Soil(), -1), r"n_harmonics = -1"),
-    (lambda: invert_receptance(1.0, 1.0, Tunnel(), Soil(), 2.5), r"n_harmonics = 2\.5"),
-    (lambda: invert_receptance(1.0, 1.0, Tunnel(), LooseSoil(poisson_ratio=0.5), 8),
-     r"soil\.poisson_ratio = 0\.5 is outside the physical range \(-1, 0\.5\)"),
-    (lambda: invert_receptance(1.0, 1.0, Tunnel(), LooseSoil(shear_loss_factor=-0.01), 8),
-     r"soil\.shear_loss_factor = -0\.01 is outside the physical range \[0, inf\)"),
-])
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: invert_receptance(0.0, 1.0, Tunnel(), Soil(), 8), r"freq_hz = 0\.0 .*\(0, inf\)"),
+        (lambda: invert_receptance([1.0, -2.0], 1.0, Tunnel(), Soil(), 8), r"freq_hz = -2\.0"),
+        (lambda: invert_receptance(np.nan, 1.0, Tunnel(), Soil(), 8), r"freq_hz contains nan"),
+        (lambda: invert_receptance(1.0, -0.1, Tunnel(), Soil(), 8), r"depth_m = -0\.1 is inside"),
+        (lambda: soil_field(1.0, 2.0, 0.0, Tunnel(), Soil(), 8), r"radius_m = 2\.0 is inside"),
+        (lambda: invert_receptance(1.0, 1.0, Tunnel(), Soil(), -1), r"n_harmonics = -1"),
+        (lambda: invert_receptance(1.0, 1.0, Tunnel(), Soil(), 2.5), r"n_harmonics = 2\.5"),
+        (
+            lambda: invert_receptance(1.0, 1.0, Tunnel(), LooseSoil(poisson_ratio=0.5), 8),
+            r"soil\.poisson_ratio = 0\.5 is outside the physical range \(-1, 0\.5\)",
+        ),
+        (
+            lambda: invert_receptance(1.0, 1.0, Tunnel(), LooseSoil(shear_loss_factor=-0.01), 8),
+            r"soil\.shear_loss_factor = -0\.01 is outside the physical range \[0, inf\)",
+        ),
+    ],
+)
 def test_bad_input_is_refused_with_a_message_naming_it(call, message):
     with pytest.raises(ValueError, match=message):
         call()
 
 
-@pytest.mark.parametrize(("name", "value"), [("poisson_ratio", 0.5), ("poisson_ratio", 0.7),
-                                             ("shear_loss_factor", -0.1),
-                                             ("bulk_loss_factor", -0.1)])
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [
+        ("poisson_ratio", 0.5),
+        ("poisson_ratio", 0.7),
+        ("shear_loss_factor", -0.1),
+        ("bulk_loss_factor", -0.1),
+    ],
+)
 def test_soil_parameters_out_of_physical_range_are_refused_at_assignment(name, value):
     with pytest.raises(ValueError, match=rf"{name} = {value!r} is outside the allowed range"):
         Soil(**{name: value})

@@ -101,11 +101,12 @@ def dense_static_track(scenario: Scenario, wheel_x: np.ndarray, loads: np.ndarra
     phi = shapes(tr.block_spacing * np.arange(1, n))
     omega2 = tr.rail_E * tr.rail_I / tr.rail_mass * (k[:, 0] * np.pi / length) ** 4
     kr, ks = tr.fastener_stiffness, tr.pad_stiffness
-    matrix = np.block([[np.diag(omega2) + kr * phi @ phi.T, -kr * phi],
-                       [-kr * phi.T, (kr + ks) * np.eye(n - 1)]])
+    matrix = np.block(
+        [[np.diag(omega2) + kr * phi @ phi.T, -kr * phi], [-kr * phi.T, (kr + ks) * np.eye(n - 1)]]
+    )
     rhs = np.concatenate([shapes(wheel_x) @ loads, np.zeros(n - 1)])
     solution = np.linalg.solve(matrix, rhs)
-    return solution[:k.size], solution[k.size:]
+    return solution[: k.size], solution[k.size :]
 
 
 @pytest.mark.parametrize("modes_per_spacing", [1.0, 1.5, 2.05])
@@ -146,18 +147,20 @@ def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
     k = np.arange(1, tr.omega2.size + 1)[:, None]
     x_blocks = scenario.track.block_spacing * np.arange(1, n)
     phi = math.sqrt(2 / (scenario.track.rail_mass * tr.length)) * np.sin(
-        k * np.pi * x_blocks[None, :] / tr.length)
+        k * np.pi * x_blocks[None, :] / tr.length
+    )
     dst = math.sqrt(2 / n) * np.sin(np.outer(np.arange(1, n), np.arange(1, n)) * np.pi / n)
     y_wheels = math.sqrt(2 / (scenario.track.rail_mass * tr.length)) * np.sin(
-        k * np.pi * model.wheel_x0[None, :] / tr.length)
+        k * np.pi * model.wheel_x0[None, :] / tr.length
+    )
     z_block, v_block = dst @ state["s"], dst @ state["sd"]
-    fastener = (tr.fastener_k * (phi.T @ state["q"] - z_block)
-                + tr.fastener_c * (phi.T @ state["qd"] - v_block))
+    fastener = tr.fastener_k * (phi.T @ state["q"] - z_block) + tr.fastener_c * (
+        phi.T @ state["qd"] - v_block
+    )
     rail_acc = -tr.omega2 * state["q"] - phi @ fastener + y_wheels @ loads
     block_acc = (fastener - tr.pad_k * z_block - tr.pad_c * v_block) / tr.block_mass
     np.testing.assert_allclose(state["qdd"], rail_acc, atol=1e-10 * np.abs(rail_acc).max())
-    np.testing.assert_allclose(dst @ state["sdd"], block_acc,
-                               atol=1e-10 * np.abs(block_acc).max())
+    np.testing.assert_allclose(dst @ state["sdd"], block_acc, atol=1e-10 * np.abs(block_acc).max())
 
 
 def test_hertz_law():
@@ -206,11 +209,13 @@ def test_quasi_static_passage_matches_static_load_and_winkler_beam():
     winkler = zimmermann_rail_deflection(scenario, result.t_s)
     assert np.max(np.abs(result.rail_disp_m - winkler)) < 0.02 * winkler.max()
     assert np.max(np.abs(result.block_disp_m - result.winkler_block_disp_m)) < (
-        0.02 * result.winkler_block_disp_m.max())
+        0.02 * result.winkler_block_disp_m.max()
+    )
     track = scenario.track
     assert track.winkler_beta == pytest.approx(1.14, abs=0.005)
     assert load * track.winkler_beta / (2 * track.winkler_modulus) == pytest.approx(
-        0.78e-3, abs=0.005e-3)
+        0.78e-3, abs=0.005e-3
+    )
     assert not result.unstable and result.warnings == [] and result.contact_loss.size == 0
 
 
@@ -243,8 +248,10 @@ def test_moving_constant_load_on_simply_supported_beam():
     model = vt._build_model(scenario, n_steps * dt)
     load = 1000.0
     model = dataclasses.replace(
-        model, track=dataclasses.replace(model.track, fastener_k=0.0, fastener_c=0.0),
-        prescribed_load=np.array([load, 0.0]))
+        model,
+        track=dataclasses.replace(model.track, fastener_k=0.0, fastener_c=0.0),
+        prescribed_load=np.array([load, 0.0]),
+    )
     out = vt._integrate(model, vt._initial_state(model), n_steps, dt)
     assert out["diverged"] is None
 
@@ -261,8 +268,11 @@ def test_moving_constant_load_on_simply_supported_beam():
     a = q0 - steady * np.sin(phase)
     b = (qd0 - steady * forcing * np.cos(phase)) / omega
     t = dt * np.arange(n_steps + 1)[None, :]
-    q = (steady[:, None] * np.sin(forcing[:, None] * t + phase[:, None])
-         + a[:, None] * np.cos(omega[:, None] * t) + b[:, None] * np.sin(omega[:, None] * t))
+    q = (
+        steady[:, None] * np.sin(forcing[:, None] * t + phase[:, None])
+        + a[:, None] * np.cos(omega[:, None] * t)
+        + b[:, None] * np.sin(omega[:, None] * t)
+    )
     midspan = amp * np.sin(k * np.pi / 2) @ q
     assert forcing[0] / omega[0] > 1.2
     np.testing.assert_allclose(out["rail_disp"], midspan, rtol=0, atol=1e-7 * midspan.max())
@@ -295,8 +305,11 @@ def test_halving_the_time_step_changes_the_peak_invert_force_below_1_percent(con
 def test_more_rail_modes_change_the_peak_invert_force_below_1_percent(convergence_runs):
     """N_m = L/L_s against 1.5 and 2 L/L_s (at smaller stable Δt): < 1 % (measured 0.7 %);
     the finer pair agrees to 0.1 % (measured 0.03 %), so 2 L/L_s is converged."""
-    default, finer, finest = (convergence_runs[1.0, 5e-5], convergence_runs[1.5, 5e-5],
-                              convergence_runs[2.0, 2.5e-5])
+    default, finer, finest = (
+        convergence_runs[1.0, 5e-5],
+        convergence_runs[1.5, 5e-5],
+        convergence_runs[2.0, 2.5e-5],
+    )
     assert abs(default / finest - 1.0) < 0.01
     assert abs(finer / finest - 1.0) < 0.001
 
@@ -319,8 +332,9 @@ def test_full_train_shows_every_axle_at_its_pass_time(train_run):
     force = result.block_force_N
     peaks, _ = find_peaks(force, height=0.5 * force.max())
     assert peaks.size == scenario.train.n_wheels == 24
-    expected = (scenario.numerics.approach_distance
-                + np.asarray(scenario.train.axle_offsets)) / scenario.train.speed
+    expected = (
+        scenario.numerics.approach_distance + np.asarray(scenario.train.axle_offsets)
+    ) / scenario.train.speed
     np.testing.assert_allclose(result.axle_pass_times_s, expected, rtol=1e-12)
     np.testing.assert_allclose(result.t_s[peaks], expected, atol=4e-3)
     assert not result.unstable and result.contact_loss.size == 0
@@ -334,9 +348,12 @@ def test_full_train_first_bogie_equals_single_bogie(train_run, bogie_run):
     _, train = train_run
     _, bogie = bogie_run
     window = bogie.t_s <= 0.8
-    np.testing.assert_allclose(train.block_force_N[:bogie.t_s.size][window],
-                               bogie.block_force_N[window], rtol=0,
-                               atol=3e-3 * bogie.block_force_N.max())
+    np.testing.assert_allclose(
+        train.block_force_N[: bogie.t_s.size][window],
+        bogie.block_force_N[window],
+        rtol=0,
+        atol=3e-3 * bogie.block_force_N.max(),
+    )
 
 
 def test_result_shapes_and_fields(train_run):
@@ -398,18 +415,23 @@ def test_loss_of_contact_is_reported_where_and_when(monkeypatch):
     the rail at the dip's entry edge, at the time its axle gets there (to one step)."""
     scenario = Scenario.preset("single_bogie")
     centre = 0.5 * scenario.rail_length + 3.0  # rail coordinate; profile x is from the block
-    monkeypatch.setattr(model.irregularity, "profile_for",
-                        lambda irregularity, x: np.where(np.abs(x - 3.0) < 0.25, 1e-3, 0.0))
+    monkeypatch.setattr(
+        model.irregularity,
+        "profile_for",
+        lambda irregularity, x: np.where(np.abs(x - 3.0) < 0.25, 1e-3, 0.0),
+    )
     result = simulate(scenario)
     assert not result.unstable
     for wheel in (0, 1):
         events = result.contact_loss[result.contact_loss["wheel"] == wheel]
         entry = events[np.argmin(np.abs(events["x_m"] - (centre - 0.25)))]
         assert entry["x_m"] == pytest.approx(centre - 0.25, abs=scenario.train.speed * 2e-4)
-        x0 = (0.5 * scenario.rail_length - scenario.numerics.approach_distance
-              - scenario.train.axle_offsets[wheel])
-        assert entry["t_s"] == pytest.approx((entry["x_m"] - x0) / scenario.train.speed,
-                                             abs=1e-9)
+        x0 = (
+            0.5 * scenario.rail_length
+            - scenario.numerics.approach_distance
+            - scenario.train.axle_offsets[wheel]
+        )
+        assert entry["t_s"] == pytest.approx((entry["x_m"] - x0) / scenario.train.speed, abs=1e-9)
         assert 0.0 < entry["duration_s"] < 0.01
         lost = (result.t_s >= entry["t_s"]) & (result.t_s < entry["t_s"] + entry["duration_s"])
         np.testing.assert_array_equal(result.wheel_force_N[wheel, lost], 0.0)
@@ -516,10 +538,13 @@ def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
     eye, zero = np.eye(size), np.zeros((size, size))
 
     def spectral_radius(h):
-        amplification = np.block([
-            [eye + h * h * acc_x, h * eye + h * h * acc_v, -0.5 * h * h * eye],
-            [1.5 * h * acc_x, eye + 1.5 * h * acc_v, -0.5 * h * eye],
-            [acc_x, acc_v, zero]])
+        amplification = np.block(
+            [
+                [eye + h * h * acc_x, h * eye + h * h * acc_v, -0.5 * h * h * eye],
+                [1.5 * h * acc_x, eye + 1.5 * h * acc_v, -0.5 * h * eye],
+                [acc_x, acc_v, zero],
+            ]
+        )
         return np.max(np.abs(np.linalg.eigvals(amplification)))
 
     return spectral_radius
@@ -527,8 +552,11 @@ def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
 
 def test_check_inputs_refuses_a_time_step_above_the_stability_limit():
     scenario = smooth_single_bogie(dt=2e-4)
-    with pytest.raises(ValueError, match=r"numerics\.dt = 0\.0002 s is above the explicit "
-                                         r"stability limit.*allowed range \(0, 0\.0001319"):
+    with pytest.raises(
+        ValueError,
+        match=r"numerics\.dt = 0\.0002 s is above the explicit "
+        r"stability limit.*allowed range \(0, 0\.0001319",
+    ):
         check_inputs(scenario)
 
 
@@ -542,8 +570,11 @@ def test_rail_too_short_is_refused_where_it_enters():
     """A rail end margin under MODEL.md's 20 m is refused by the parameter's bounds, and the
     derived rail always honours the margin."""
     scenario = smooth_single_bogie()
-    with pytest.raises(ValueError, match=r"rail_end_margin = 5.0 is outside the allowed range "
-                                         r"\[20, inf\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"rail_end_margin = 5.0 is outside the allowed range "
+        r"\[20, inf\)",
+    ):
         scenario.numerics.rail_end_margin = 5.0
     span = scenario.train.axle_span + scenario.numerics.approach_distance
     assert 0.5 * scenario.rail_length - span >= 20.0
