@@ -152,7 +152,7 @@ def _note_html(text: str) -> str:
 
 
 def _preset_descriptions() -> dict[str, str]:
-    """Description of every preset, from ``assets/presets.json``."""
+    """Description of every preset, from ``model/data/presets.json``."""
     presets = json.loads(PRESETS_FILE.read_text(encoding="utf-8"))["presets"]
     return {name: entry.get("description", "") for name, entry in presets.items()}
 

@@ -16,10 +16,10 @@ import holoviews as hv
 import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used below)
 import numpy as np
 
-from model.params import Soil
+from model.params import DATA_DIR, Soil
 from model.pipeline import Results
 
-REFERENCE_FILE = Path(__file__).resolve().parent.parent / "assets" / "paper_reference.json"
+REFERENCE_FILE = DATA_DIR / "paper_reference.json"
 
 # A displayed time history keeps at most this many points: a 6-car passage at Δt = 1e-4 s has
 # ~70 000 samples, far more than a plot's pixels; min/max decimation keeps every peak visible.

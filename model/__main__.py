@@ -28,7 +28,7 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         "--preset",
         default="paper",
         choices=Scenario.preset_names(),
-        help="named scenario from assets/presets.json (default: paper)",
+        help="named scenario from model/data/presets.json (default: paper)",
     )
     source.add_argument("--scenario", type=Path, help="scenario JSON file written by a run")
     parser.add_argument(

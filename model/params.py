@@ -14,14 +14,17 @@ from __future__ import annotations
 
 import json
 import math
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
 import param
 
 GRAVITY = 9.81  # m/s², standard value used for static loads
-ASSETS_DIR = Path(__file__).resolve().parent.parent / "assets"
-PRESETS_FILE = ASSETS_DIR / "presets.json"
+# Package data (presets, the paper's reported numbers, an example measured profile), shipped
+# inside the package so that a plain `pip install` finds it from any working directory.
+DATA_DIR = Path(str(files("model") / "data"))
+PRESETS_FILE = DATA_DIR / "presets.json"
 
 # Hertz contact constant G = a R^b × 1e-8 m/N^(2/3) (Zhai's empirical fits), by wheel tread type.
 HERTZ_FITS = {"conical": (4.57, -0.149), "worn": (3.86, -0.115)}
@@ -689,12 +692,12 @@ class Scenario(param.Parameterized):
     # ---- presets --------------------------------------------------------------------------
     @staticmethod
     def preset_names() -> list[str]:
-        """Names of the presets stored in ``assets/presets.json``."""
+        """Names of the presets stored in ``model/data/presets.json``."""
         return list(_load_presets())
 
     @classmethod
     def preset(cls, name: str) -> Scenario:
-        """Scenario of a named preset from ``assets/presets.json``."""
+        """Scenario of a named preset from ``model/data/presets.json``."""
         presets = _load_presets()
         if name not in presets:
             raise KeyError(f"unknown preset {name!r}; available: {', '.join(presets)}")

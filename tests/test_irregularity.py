@@ -15,7 +15,7 @@ from model.irregularity import (
     series_wavenumbers,
     synthesize_profile,
 )
-from model.params import ASSETS_DIR, Irregularity
+from model.params import DATA_DIR, Irregularity
 
 OMEGA_C = 0.8245  # rad/m, FRA cut-off
 DEFAULT_BAND = (1.0, 50.0)
@@ -286,9 +286,9 @@ def test_load_profile_refuses_malformed_file(tmp_path, text, message):
 
 
 def test_example_profile_asset_loads_and_covers_default_rail():
-    """assets/example_profile.csv: −160…160 m from the monitored block at 1 m, η in mm, covering
+    """model/data/example_profile.csv: −160…160 m from the monitored block at 1 m, η in mm, covering
     the paper-case rail (±158.4 m)."""
-    x, eta = load_profile_csv(ASSETS_DIR / "example_profile.csv")
+    x, eta = load_profile_csv(DATA_DIR / "example_profile.csv")
     assert x[0] == -160.0 and x[-1] == 160.0 and x.size == 321
     # Class 5 over 4–50 m has RMS ≈ 5 mm; the file holds a synthesized sample of it.
     assert 1e-3 < np.std(eta) < 2e-2
