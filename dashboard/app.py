@@ -51,6 +51,7 @@ GROUP_TITLES = {
     "tunnel": "Lining",
     "vehicle": "Vehicle",
     "numerics": "Numerics",
+    "longterm": "Long-term settlement",
 }
 """Collapsible groups in display order: section → title."""
 

@@ -474,6 +474,15 @@ class Tunnel(param.Parameterized):
         (False, True),
     )
 
+    model = param.Selector(
+        default="2d",
+        objects=["2d", "2.5d"],
+        label="Tunnel–soil model",
+        doc="'2d': the paper's plane-strain section (ring in soil), the load of one block spread "
+        "over one block spacing on the whole tunnel at once; '2.5d': the lining as a cylindrical "
+        "shell infinite along the tunnel, loaded by the moving train (kernel at ξ = ω/v).",
+    )
+
     @property
     def ring_radius(self) -> float:
         """Radius of the ring's middle surface a = inner radius + h/2 (m)."""
@@ -669,11 +678,167 @@ class Numerics(param.Parameterized):
     )
 
 
-SECTIONS = ("vehicle", "train", "track", "irregularity", "tunnel", "soil", "numerics")
+# Li & Selig (1996) parameter sets (a in %, b, m) by soil class (MODEL.md §10).
+LI_SELIG_SOIL_CLASSES = {
+    "ML": (0.64, 0.10, 1.7),
+    "MH": (0.84, 0.13, 2.0),
+    "CL": (1.1, 0.16, 2.0),
+    "CH": (1.2, 0.18, 2.4),
+}
+
+
+class LongTerm(param.Parameterized):
+    """Permanent settlement accumulated over years of traffic (MODEL.md §10).
+
+    Static stress state of the ground around the tunnel, traffic, and the empirical cyclic
+    strain-accumulation law ε_p(q_d, N) (ε_p in %, stresses in the law as ratios).
+    """
+
+    law = param.Selector(
+        default="li_selig",
+        objects=["li_selig", "chai_miura", "monismith"],
+        label="Strain law",
+        doc="Cyclic strain-accumulation law: Li & Selig (1996) ε_p = a (q_d/σ_s)^m N^b; "
+        "Chai & Miura (2002) ε_p = a (q_d/q_f)^m (1 + q_s/q_f)^n N^b; Monismith (1975) "
+        "ε_p = A N^b.",
+    )
+    soil_class = param.Selector(
+        default="CH",
+        objects=[*LI_SELIG_SOIL_CLASSES, "user"],
+        label="Soil class",
+        doc="Li & Selig parameter set (a, b, m) for ML, MH, CL, CH soils; 'user' takes the values "
+        "of a, b and m below (e.g. from a cyclic-triaxial calibration).",
+    )
+    a = _q(
+        1.2,
+        (0, 100),
+        (0.1, 5.0),
+        "Law coefficient a (%)",
+        "Coefficient a (or A of Monismith) of the strain law, ε_p in %; used when the soil class "
+        "is 'user' or the law is not Li & Selig.",
+        (False, True),
+    )
+    b = _q(
+        0.18,
+        (0, 1),
+        (0.05, 0.4),
+        "Cycle exponent b (-)",
+        "Exponent b of N in the strain law; used when the soil class is 'user' or the law is not "
+        "Li & Selig.",
+        (False, False),
+    )
+    m = _q(
+        2.4,
+        (0, 10),
+        (1.0, 4.0),
+        "Stress exponent m (-)",
+        "Exponent m of the stress ratio in the strain law; used when the soil class is 'user' or "
+        "the law is not Li & Selig.",
+        (False, True),
+    )
+    n = _q(
+        1.0,
+        (0, 10),
+        (0.0, 3.0),
+        "Static-stress exponent n (-)",
+        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law (default 1.0).",
+    )
+    trains_per_day = _q(
+        200.0,
+        (0, 5000),
+        (10.0, 600.0),
+        "Trains per day (-)",
+        "Passages of the train over the section per day, both directions.",
+        (False, True),
+    )
+    years = _q(
+        20.0,
+        (0, 200),
+        (1.0, 100.0),
+        "Years of service (yr)",
+        "Service time at which the final settlement is reported; the settlement-time curve runs "
+        "from one day of traffic to this time.",
+        (False, True),
+    )
+    cycles_per_train = param.Selector(
+        default="bogies",
+        objects=["bogies", "rainflow"],
+        label="Cycles per train",
+        doc="Load cycles per passage: one per bogie, or counted on the deviator history by "
+        "rainflow (ASTM E1049), full cycles weighted by their range.",
+    )
+    axis_depth = _q(
+        15.0,
+        (0, 200),
+        (8.0, 40.0),
+        "Tunnel axis depth (m)",
+        "Depth of the tunnel axis below the ground surface, H_t; the paper gives none, 15 m is "
+        "assumed.",
+        (False, True),
+    )
+    water_table_depth = _q(
+        0.0,
+        (0, 200),
+        (0.0, 10.0),
+        "Water table depth (m)",
+        "Depth of the water table below the ground surface (soil above it is taken as dry at "
+        "the same density).",
+    )
+    friction_angle = _q(
+        25.0,
+        (0, 60),
+        (15.0, 40.0),
+        "Effective friction angle φ′ (°)",
+        "Effective friction angle; sets K0 = 1 − sin φ′ (Jaky) for the static stress state.",
+        (False, True),
+    )
+    cu_ratio = _q(
+        0.22,
+        (0, 2),
+        (0.1, 0.5),
+        "Undrained strength ratio c_u/σ′_v0 (-)",
+        "Undrained shear strength as a ratio to the vertical effective stress (normally "
+        "consolidated clay); the static strength is σ_s = q_f = 2c_u.",
+        (False, True),
+    )
+    undrained_strength = _q(
+        None,
+        (0, None),
+        (10e3, 200e3),
+        "Undrained shear strength c_u (Pa)",
+        "Undrained shear strength given directly (uniform with depth); None uses the ratio to "
+        "σ′_v0 above.",
+        (False, True),
+        allow_none=True,
+    )
+
+    @property
+    def earth_pressure_coefficient(self) -> float:
+        """K0 = 1 − sin φ′ (Jaky)."""
+        return 1.0 - math.sin(math.radians(self.friction_angle))
+
+    def law_parameters(self) -> tuple[float, float, float]:
+        """(a, b, m) in force: the soil class's set for Li & Selig, else the user values."""
+        if self.law == "li_selig" and self.soil_class != "user":
+            return LI_SELIG_SOIL_CLASSES[self.soil_class]
+        return self.a, self.b, self.m
+
+
+SECTIONS = (
+    "vehicle",
+    "train",
+    "track",
+    "irregularity",
+    "tunnel",
+    "soil",
+    "numerics",
+    "longterm",
+)
 
 
 class Scenario(param.Parameterized):
-    """One complete set of inputs: vehicle, train, track, irregularity, tunnel, soil, numerics."""
+    """One complete set of inputs: vehicle, train, track, irregularity, tunnel, soil, numerics,
+    long-term settlement."""
 
     vehicle = param.ClassSelector(class_=Vehicle, instantiate=True)
     train = param.ClassSelector(class_=Train, instantiate=True)
@@ -682,6 +847,7 @@ class Scenario(param.Parameterized):
     tunnel = param.ClassSelector(class_=Tunnel, instantiate=True)
     soil = param.ClassSelector(class_=Soil, instantiate=True)
     numerics = param.ClassSelector(class_=Numerics, instantiate=True)
+    longterm = param.ClassSelector(class_=LongTerm, instantiate=True)
 
     def __init__(self, **params):
         classes = {name: self.param[name].class_ for name in SECTIONS}
@@ -719,6 +885,11 @@ class Scenario(param.Parameterized):
     def paper_soil_wave_speeds(cls) -> Scenario:
         """Paper case with the soil of Table 4's wave speeds c1 = 524, c2 = 190 m/s."""
         return cls.preset("paper_soil_wave_speeds")
+
+    @classmethod
+    def paper_2p5d(cls) -> Scenario:
+        """The paper's case with the 2.5D moving-load tunnel–soil model."""
+        return cls.preset("paper_2p5d")
 
     @classmethod
     def type_b(cls) -> Scenario:
