@@ -1,13 +1,19 @@
 """Command line: run a scenario and write its results as CSV and JSON.
 
-Example::
+Examples::
 
     python -m model --preset paper --out results --set train.speed_kmh=60
+    python -m model study --preset paper --vary train.speed_kmh=40:80:5 --seeds 20 --out study
+    python -m model fe --preset paper --law mohr_coulomb --passages 3 --out fe
+
+The first word picks a subcommand (``study``: parameter sweeps and Monte-Carlo bands on Dask,
+``fe``: the OpenSeesPy section check); without one, a single run is made.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 import time
@@ -141,8 +147,16 @@ def write_results(results: Results, out: Path) -> list[Path]:
     return [*written, scenario_path, summary_path]
 
 
+SUBCOMMANDS = {"study": "model.study", "fe": "model.fe_section"}
+"""Subcommand → module whose ``main(argv)`` handles it."""
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the process exit code (2 for bad input)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in SUBCOMMANDS:
+        module = importlib.import_module(SUBCOMMANDS[argv[0]])
+        return module.main(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
