@@ -867,7 +867,7 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
         * np.exp(-xi)
         * (np.cos(xi) + np.sin(xi))
     ).sum(axis=0)
-    return rail * track.fastener_stiffness / (track.fastener_stiffness + track.pad_stiffness)
+    return rail * track.support_stiffness / track.pad_stiffness  # Z_s = F/K_s, F = k L_s w
 
 
 def simulate(
