@@ -18,6 +18,7 @@ import numpy as np
 
 from model.params import DATA_DIR, Soil
 from model.pipeline import Results
+from model.settlement import COMPARISON_DEPTH_M
 
 REFERENCE_FILE = DATA_DIR / "paper_reference.json"
 
@@ -225,7 +226,12 @@ def summary_items(results: Results) -> list[SummaryItem]:
             s["peak_disp_invert_m"] * MM,
             "mm",
         ),
-        SummaryItem("peak_disp_11m", "… 11 m below the invert", s["peak_disp_11m_m"] * MM, "mm"),
+        SummaryItem(
+            "peak_disp_11m",
+            f"… {COMPARISON_DEPTH_M:g} m below the invert",
+            s["peak_disp_11m_m"] * MM,
+            "mm",
+        ),
         SummaryItem(
             "peak_disp_deepest",
             f"… {deepest:g} m below the invert",

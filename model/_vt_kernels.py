@@ -1,4 +1,4 @@
-"""Numba kernels of the vehicle–track model (plain floats and arrays only).
+"""Numba kernels of the vehicle–track model (records of plain floats and arrays only).
 
 The track is integrated in the form described in ``docs/vehicle_track.md``: rail modal
 coordinates q_k (unit modal mass, k = 1..N_m) and *block modal* coordinates s_r (r = 1..N−1),
@@ -9,6 +9,11 @@ track and O(N_m · n_wheels) for the wheel–rail coupling, with no transform at
 
 Vehicle: per car a dense (d × d) stiffness and damping matrix, a diagonal mass, gravity, and the
 local indices of its wheelset DOFs. Displacements are positive downward.
+
+The kernels take the named records of :mod:`model.vehicle_track` (``TrackSystem``,
+``VehicleSystem``, ``WheelInputs``, ``SystemState``, ``Scratch``, ``Outputs``, ``ContactLog``):
+typed named tuples, which Numba passes by value as structs of their fields. They only read the
+fields by name, so the records are defined with the assembly code and not imported here.
 """
 
 from __future__ import annotations
@@ -16,7 +21,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 # Status codes returned by ``advance``
 RUNNING = -1
@@ -59,10 +63,10 @@ def profile_at(eta_grid, grid_start, grid_step, x):
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def vehicle_accelerations(
-    u, ud, udd, inv_mass, stiffness, damping, gravity_force, wheel_dof, wheel_force
-):
+def vehicle_accelerations(u, ud, udd, vehicle, wheel_force):
     """Vehicle: M ü = f_g − K u − C u̇ − (contact forces on the wheelsets), car by car."""
+    inv_mass, stiffness, damping = vehicle.inv_mass, vehicle.stiffness, vehicle.damping
+    gravity_force, wheel_dof = vehicle.gravity_force, vehicle.wheel_dof
     n_cars, n_dof = inv_mass.shape
     wheels_per_car = wheel_dof.shape[1]
     for car in range(n_cars):
@@ -79,66 +83,37 @@ def vehicle_accelerations(
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def accelerations(
-    t,
-    q,
-    qd,
-    qdd,
-    s,
-    sd,
-    sdd,
-    u,
-    ud,
-    udd,
-    omega2,
-    fold_index,
-    fold_sign,
-    block_gain,
-    mode_amplitude,
-    wavenumber_unit,
-    fastener_k,
-    fastener_c,
-    pad_k,
-    pad_c,
-    block_mass,
-    inv_mass,
-    stiffness,
-    damping,
-    gravity_force,
-    wheel_dof,
-    wheel_x0,
-    speed,
-    hertz_constant,
-    prescribed_load,
-    eta_grid,
-    eta_start,
-    eta_step,
-    sine_table,
-    wheel_work,
-    rail_at_wheel,
-    fold_disp,
-    fold_vel,
-    block_mode_force,
-    wheel_x,
-    compression,
-    wheel_force,
-):
-    """Accelerations qdd, sdd, udd of the whole system at time t; wheel forces as a by-product.
+def accelerations(t, state, track, vehicle, wheels, scratch):
+    """Accelerations qdd, sdd, udd of the whole system at time t; wheel forces in ``scratch``.
 
-    ``prescribed_load`` (n_wheels,) replaces the Hertz law when its first entry is ≥ 0: the
-    moving-constant-load model, with the vehicle at rest (ü = 0, δ reported as 0). Pass [-1.0]
-    for the coupled vehicle.
+    ``wheels.prescribed_load`` (n_wheels,) replaces the Hertz law when its first entry is ≥ 0:
+    the moving-constant-load model, with the vehicle at rest (ü = 0, δ reported as 0). It is
+    [-1.0] for the coupled vehicle.
     """
+    q, qd, qdd = state.q, state.qd, state.qdd
+    s, sd, sdd = state.s, state.sd, state.sdd
+    u, ud, udd = state.u, state.ud, state.udd
+    omega2, fold_index, fold_sign = track.omega2, track.fold_index, track.fold_sign
+    block_gain, mode_amplitude = track.block_gain, track.mode_amplitude
+    wavenumber_unit = track.wavenumber_unit
+    fastener_k, fastener_c = track.fastener_k, track.fastener_c
+    pad_k, pad_c, block_mass = track.pad_k, track.pad_c, track.block_mass
+    wheel_x0, speed, prescribed_load = wheels.x0, wheels.speed, wheels.prescribed_load
+    sine_table, rail_at_wheel = scratch.sine_table, scratch.rail_at_wheel
+    fold_disp, fold_vel = scratch.fold_disp, scratch.fold_vel
+    block_mode_force, wheel_x = scratch.block_mode_force, scratch.wheel_x
+    compression, wheel_force = scratch.compression, scratch.wheel_force
     n_modes = q.size
     n_wheels = wheel_x0.size
-    n_cars, n_dof = inv_mass.shape
+    n_dof = vehicle.inv_mass.shape[1]
+    wheel_dof = vehicle.wheel_dof
     wheels_per_car = wheel_dof.shape[1]
 
     # Mode shapes at the wheels, Y_k(x_j) = A sin(kθ_j), by the Chebyshev recurrence
     # sin((k+1)θ) = 2cosθ sin kθ − sin((k−1)θ); inner loops run over wheels so they vectorise.
-    two_cos = wheel_work[0]
-    s_prev = wheel_work[1]
-    s_cur = wheel_work[2]
+    two_cos = scratch.wheel_work[0]
+    s_prev = scratch.wheel_work[1]
+    s_cur = scratch.wheel_work[2]
     for j in range(n_wheels):
         x = wheel_x0[j] + speed * t
         wheel_x[j] = x
@@ -184,12 +159,10 @@ def accelerations(
         for j in range(n_wheels):
             car = j // wheels_per_car
             dof = car * n_dof + wheel_dof[car, j % wheels_per_car]
-            eta = profile_at(eta_grid, eta_start, eta_step, wheel_x[j])
+            eta = profile_at(wheels.eta_grid, wheels.eta_start, wheels.eta_step, wheel_x[j])
             compression[j] = u[dof] - rail_at_wheel[j] - eta
-            wheel_force[j] = hertz_force(compression[j], hertz_constant)
-        vehicle_accelerations(
-            u, ud, udd, inv_mass, stiffness, damping, gravity_force, wheel_dof, wheel_force
-        )
+            wheel_force[j] = hertz_force(compression[j], wheels.hertz_constant)
+        vehicle_accelerations(u, ud, udd, vehicle, wheel_force)
 
     # Track: rail modes k < N meet block mode k directly (ρ = k, σ = +1); higher modes fold
     n_block_modes = s.size
@@ -229,61 +202,21 @@ def advance(
     dt,
     phi,
     psi,
-    q,
-    qd,
-    qdd,
-    qdd_prev,
-    s,
-    sd,
-    sdd,
-    sdd_prev,
-    u,
-    ud,
-    udd,
-    udd_prev,
-    omega2,
-    fold_index,
-    fold_sign,
-    block_gain,
-    mode_amplitude,
-    wavenumber_unit,
-    fastener_k,
-    fastener_c,
-    pad_k,
-    pad_c,
-    block_mass,
-    inv_mass,
-    stiffness,
-    damping,
-    gravity_force,
-    wheel_dof,
-    body_dof,
-    wheel_x0,
-    speed,
-    hertz_constant,
-    prescribed_load,
-    eta_grid,
-    eta_start,
-    eta_step,
-    monitor_block_weight,
-    monitor_rail_weight,
     divergence_limit,
-    in_contact,
-    open_event,
-    events,
-    event_count,
-    block_force,
-    block_disp,
-    rail_disp,
-    wheel_force_out,
-    wheel_acc_out,
-    body_acc_out,
+    state,
+    track,
+    vehicle,
+    wheels,
+    scratch,
+    outputs,
+    contact,
 ):
     """Advance the system from step ``step_start`` to ``step_stop`` with Zhai's method.
 
     Step n takes the state at t_n = n·dt to t_{n+1} and writes outputs at index n + 1 (index 0
-    holds the initial state). φ = ψ = 0 on step 0. Loss of contact is logged in ``events``
-    (rows: wheel, t_start, x_start, t_end) while ``event_count[0]`` counts all of them.
+    holds the initial state). φ = ψ = 0 on step 0. Loss of contact is logged in
+    ``contact.events`` (rows: wheel, t_start, x_start, t_end) while ``contact.event_count[0]``
+    counts all of them.
 
     Returns
     -------
@@ -293,94 +226,23 @@ def advance(
         ``divergence_limit`` m; a gap of any size is a wheel in flight, not divergence);
         outputs from that index on are not valid.
     """
-    n_modes = q.size
-    n_block_modes = s.size
-    n_wheels = wheel_x0.size
-    n_dof = inv_mass.shape[1]
-    sine_table = np.empty((n_modes, n_wheels))
-    wheel_work = np.empty((3, n_wheels))
-    rail_at_wheel = np.empty(n_wheels)
-    fold_disp = np.empty(n_block_modes)
-    fold_vel = np.empty(n_block_modes)
-    block_mode_force = np.empty(n_block_modes)
-    wheel_x = np.empty(n_wheels)
-    compression = np.empty(n_wheels)
-    wheel_force = np.empty(n_wheels)
+    n_wheels = wheels.x0.size
+    compression, wheel_force, wheel_x = scratch.compression, scratch.wheel_force, scratch.wheel_x
+    in_contact, open_event = contact.in_contact, contact.open_event
+    events, event_count = contact.events, contact.event_count
     event_capacity = events.shape[0]
+    block_force = outputs.block_force
 
     for step in range(step_start, step_stop):
         step_phi = 0.0 if step == 0 else phi
         step_psi = 0.0 if step == 0 else psi
-        zhai_predict(q, qd, qdd, qdd_prev, dt, step_phi, step_psi)
-        zhai_predict(s, sd, sdd, sdd_prev, dt, step_phi, step_psi)
-        zhai_predict(u, ud, udd, udd_prev, dt, step_phi, step_psi)
+        zhai_predict(state.q, state.qd, state.qdd, state.qdd_prev, dt, step_phi, step_psi)
+        zhai_predict(state.s, state.sd, state.sdd, state.sdd_prev, dt, step_phi, step_psi)
+        zhai_predict(state.u, state.ud, state.udd, state.udd_prev, dt, step_phi, step_psi)
         out = step + 1
         t = out * dt
-        accelerations(
-            t,
-            q,
-            qd,
-            qdd,
-            s,
-            sd,
-            sdd,
-            u,
-            ud,
-            udd,
-            omega2,
-            fold_index,
-            fold_sign,
-            block_gain,
-            mode_amplitude,
-            wavenumber_unit,
-            fastener_k,
-            fastener_c,
-            pad_k,
-            pad_c,
-            block_mass,
-            inv_mass,
-            stiffness,
-            damping,
-            gravity_force,
-            wheel_dof,
-            wheel_x0,
-            speed,
-            hertz_constant,
-            prescribed_load,
-            eta_grid,
-            eta_start,
-            eta_step,
-            sine_table,
-            wheel_work,
-            rail_at_wheel,
-            fold_disp,
-            fold_vel,
-            block_mode_force,
-            wheel_x,
-            compression,
-            wheel_force,
-        )
-        record(
-            out,
-            q,
-            s,
-            sd,
-            udd,
-            n_dof,
-            wheel_dof,
-            body_dof,
-            pad_k,
-            pad_c,
-            monitor_block_weight,
-            monitor_rail_weight,
-            wheel_force,
-            block_force,
-            block_disp,
-            rail_disp,
-            wheel_force_out,
-            wheel_acc_out,
-            body_acc_out,
-        )
+        accelerations(t, state, track, vehicle, wheels, scratch)
+        record(out, state, track, vehicle, scratch, outputs)
 
         for j in range(n_wheels):
             delta = compression[j]
@@ -409,43 +271,29 @@ def advance(
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def record(
-    out,
-    q,
-    s,
-    sd,
-    udd,
-    n_dof,
-    wheel_dof,
-    body_dof,
-    pad_k,
-    pad_c,
-    monitor_block_weight,
-    monitor_rail_weight,
-    wheel_force,
-    block_force,
-    block_disp,
-    rail_disp,
-    wheel_force_out,
-    wheel_acc_out,
-    body_acc_out,
-):
+def record(out, state, track, vehicle, scratch, outputs):
     """Write the monitored quantities of the current state at output index ``out``."""
+    q, s, sd, udd = state.q, state.s, state.sd, state.udd
+    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
     z_block = 0.0
     v_block = 0.0
     for r in range(s.size):
-        z_block += monitor_block_weight[r] * s[r]
-        v_block += monitor_block_weight[r] * sd[r]
+        z_block += block_weight[r] * s[r]
+        v_block += block_weight[r] * sd[r]
     z_rail = 0.0
     for k in range(q.size):
-        z_rail += monitor_rail_weight[k] * q[k]
-    block_disp[out] = z_block
-    block_force[out] = pad_k * z_block + pad_c * v_block
-    rail_disp[out] = z_rail
+        z_rail += rail_weight[k] * q[k]
+    outputs.block_disp[out] = z_block
+    outputs.block_force[out] = track.pad_k * z_block + track.pad_c * v_block
+    outputs.rail_disp[out] = z_rail
+    n_dof = vehicle.inv_mass.shape[1]
+    wheel_dof = vehicle.wheel_dof
     wheels_per_car = wheel_dof.shape[1]
+    wheel_force = scratch.wheel_force
     for j in range(wheel_force.size):
         car = j // wheels_per_car
-        wheel_force_out[j, out] = wheel_force[j]
-        wheel_acc_out[j, out] = udd[car * n_dof + wheel_dof[car, j % wheels_per_car]]
-    for car in range(body_acc_out.shape[0]):
-        body_acc_out[car, out] = udd[car * n_dof + body_dof]
+        outputs.wheel_force[j, out] = wheel_force[j]
+        outputs.wheel_acc[j, out] = udd[car * n_dof + wheel_dof[car, j % wheels_per_car]]
+    body_acc = outputs.body_acc
+    for car in range(body_acc.shape[0]):
+        body_acc[car, out] = udd[car * n_dof + vehicle.body_dof]

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from model.params import Scenario
-from model.settlement import TAIL_TRANSIT_TIMES, SoilResponse, soil_response
+from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail, soil_response
 from model.spectra import one_sided_psd
 from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
@@ -96,7 +96,7 @@ class Results:
             "peak_wheel_force_N": float(np.max(vt.wheel_force_N)),
             "min_wheel_force_N": float(np.min(vt.wheel_force_N)),
             "peak_disp_invert_m": float(peak[0]),
-            "peak_disp_11m_m": float(np.interp(11.0, depth, peak)),
+            "peak_disp_11m_m": float(np.interp(COMPARISON_DEPTH_M, depth, peak)),
             "peak_disp_deepest_m": float(peak[-1]),
             "deepest_depth_m": float(depth[-1]),
             "soil_p_wave_speed_m_s": scenario.soil.p_wave_speed,
@@ -283,7 +283,7 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
             "loaded, which cuts the load history and lowers the soil response"
         )
     record = scenario.passage_duration
-    needed = record + TAIL_TRANSIT_TIMES * numerics.max_depth / scenario.soil.s_wave_speed
+    needed = record + response_tail(numerics.max_depth, scenario.soil.s_wave_speed)
     if numerics.zero_pad_factor * record < needed:
         warnings.append(
             f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "

@@ -6,6 +6,16 @@ Euler rail on identical, uniformly spaced blocks (fastener K_r, C_r; block mass 
 K_s, C_s onto the rigid invert). Hertz contact with loss of contact, rail irregularity from
 :func:`model.irregularity.profile_for`, Zhai's explicit integrator (φ = ψ = ½) from static
 equilibrium. Equations, the fast formulation and measured figures: ``docs/vehicle_track.md``.
+
+:func:`simulate` runs a passage. Underneath, the kernels in ``model._vt_kernels`` take a few
+named records (typed named tuples, built once per run), which the public assembly functions
+build and the tests use directly::
+
+    track = assemble_track(scenario)        # TrackSystem: rail modes, blocks, monitored block
+    vehicle = assemble_vehicle(scenario)    # VehicleSystem: per-car M⁻¹, K, C, gravity
+    wheels = assemble_wheels(scenario, duration_s)  # WheelInputs: positions, speed, G, η grid
+    state = static_equilibrium(scenario, track, vehicle, wheels)  # SystemState
+    run = integrate(track, vehicle, wheels, state, n_time_steps(scenario), dt)  # Integration
 """
 
 from __future__ import annotations
@@ -13,12 +23,47 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from model import _vt_kernels as kernels
 from model import irregularity
+from model._vt_kernels import hertz_force, zhai_predict
 from model.params import GRAVITY, Scenario
+
+__all__ = [
+    # running a passage
+    "simulate",
+    "check_inputs",
+    "stable_time_step",
+    "zhai_damped_limit",
+    "winkler_block_displacement",
+    "VehicleTrackResult",
+    "CONTACT_EVENT_DTYPE",
+    # assembly of the kernel records, statics and time stepping (used by tests and benchmarks)
+    "TrackSystem",
+    "VehicleSystem",
+    "WheelInputs",
+    "SystemState",
+    "Outputs",
+    "Integration",
+    "assemble_track",
+    "assemble_vehicle",
+    "assemble_wheels",
+    "wheel_start_positions",
+    "static_wheel_loads",
+    "vehicle_equilibrium",
+    "track_equilibrium",
+    "static_equilibrium",
+    "n_time_steps",
+    "integrate",
+    # the two kernels with a closed-form check of their own
+    "hertz_force",
+    "zhai_predict",
+    "ZHAI_PHI",
+    "ZHAI_PSI",
+]
 
 ZHAI_PHI = 0.5
 ZHAI_PSI = 0.5
@@ -70,40 +115,39 @@ class VehicleTrackResult:
     speed_m_s: float = 0.0
 
 
-# ---- assembly -------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _VehicleSystem:
-    """Per-car matrices of the linear vehicle (kernel arrays)."""
+# ---- kernel records --------------------------------------------------------------------------
+# Typed named tuples: Numba passes them to the kernels as structs, by field name, with
+# nogil=True and cache=True. Scalars are Python floats and ints, arrays float64 (int64 for
+# indices), so one compiled signature serves every scenario.
+class TrackSystem(NamedTuple):
+    """Modal rail on uniformly spaced identical blocks in the diagonal (block modal) form.
 
-    inv_mass: np.ndarray  # (n_cars, d)
-    stiffness: np.ndarray  # (n_cars, d, d)
-    damping: np.ndarray  # (n_cars, d, d)
-    gravity_force: np.ndarray  # (n_cars, d)
-    wheel_dof: np.ndarray  # (n_cars, wheels per car), local DOF index of each wheelset
-    body_dof: int  # local DOF index of the car-body bounce
+    Built by :func:`assemble_track`. Rail modes Y_k(x) = A sin(kπx/L), k = 1..N_m; blocks at
+    i L_s, i = 1..N−1 (N = L/L_s), in block modal coordinates (docs/vehicle_track.md).
+    """
 
-
-@dataclass(frozen=True)
-class _TrackSystem:
-    """Modal rail on uniformly spaced identical blocks in the diagonal (block modal) form."""
-
-    length: float
-    n_spacings: int  # N = L / L_s; blocks at i L_s, i = 1..N−1
-    omega2: np.ndarray  # (N_m,) ω_k² of the free rail
+    length: float  # L (m)
+    n_spacings: int  # N = L / L_s
+    omega2: np.ndarray  # (N_m,) ω_k² of the free rail (rad²/s²)
     fold_index: np.ndarray  # (N_m,) block mode ρ(k) − 1 that rail mode k meets, −1 if none
     fold_sign: np.ndarray  # (N_m,) σ_k
-    block_gain: float  # b = 1/√(m_r L_s)
-    mode_amplitude: float  # A = √(2/(m_r L)): Y_k(x) = A sin(kπx/L)
-    fastener_k: float
-    fastener_c: float
-    pad_k: float
-    pad_c: float
-    block_mass: float
+    block_gain: float  # b = 1/√(m_r L_s) (1/√kg)
+    mode_amplitude: float  # A = √(2/(m_r L)) (1/√kg)
+    wavenumber_unit: float  # π/L (1/m)
+    fastener_k: float  # K_r (N/m)
+    fastener_c: float  # C_r (N·s/m)
+    pad_k: float  # K_s (N/m)
+    pad_c: float  # C_s (N·s/m)
+    block_mass: float  # M_s (kg)
+    support_k: float  # K_r K_s/(K_r + K_s), fastener and pad in series (N/m)
+    monitored_block: int  # block i (1..N−1) whose invert force is recorded
+    monitored_block_weights: np.ndarray  # (N−1,) Z_s,i = Σ_r w_r s_r at the monitored block
+    monitored_rail_shapes: np.ndarray  # (N_m,) Y_k at the monitored block
 
     @property
-    def wavenumber_unit(self) -> float:
-        """π/L (1/m)."""
-        return math.pi / self.length
+    def monitored_x(self) -> float:
+        """Position of the monitored block (m)."""
+        return self.monitored_block * self.length / self.n_spacings
 
     def mode_shapes(self, x: np.ndarray) -> np.ndarray:
         """Y_k(x) for all modes, shape (N_m, x.size)."""
@@ -118,15 +162,126 @@ class _TrackSystem:
 
     def block_mode_weights(self, block: int) -> np.ndarray:
         """Z_s,i = Σ_r w_r s_r for block i (1..N−1): w_r = √(2/N) sin(rπi/N)."""
-        n = self.n_spacings
-        r = np.arange(1, n)
-        return math.sqrt(2.0 / n) * np.sin(r * math.pi * block / n)
+        return _block_mode_weights(self.n_spacings, block)
 
 
-def _track_system(scenario: Scenario) -> _TrackSystem:
-    """Track arrays for the scenario's rail length and mode count."""
+class VehicleSystem(NamedTuple):
+    """Per-car matrices of the linear one-rail vehicle, built by :func:`assemble_vehicle`."""
+
+    inv_mass: np.ndarray  # (n_cars, d) 1/m_i (1/kg or 1/(kg·m²))
+    stiffness: np.ndarray  # (n_cars, d, d) (N/m, N or N·m)
+    damping: np.ndarray  # (n_cars, d, d)
+    gravity_force: np.ndarray  # (n_cars, d) (N)
+    wheel_dof: np.ndarray  # (n_cars, wheels per car), local DOF index of each wheelset
+    body_dof: int  # local DOF index of the car-body bounce
+
+
+class WheelInputs(NamedTuple):
+    """Wheel motion, contact law and rail irregularity, built by :func:`assemble_wheels`."""
+
+    x0: np.ndarray  # (n_wheels,) positions at t = 0 (m), leading axle first
+    speed: float  # v (m/s)
+    hertz_constant: float  # G (m/N^(2/3))
+    prescribed_load: np.ndarray  # (n_wheels,) loads (N) replacing Hertz contact, or [-1.0]
+    eta_grid: np.ndarray  # irregularity η (m) on a uniform grid
+    eta_start: float  # rail coordinate of eta_grid[0] (m)
+    eta_step: float  # grid step (m)
+
+    def profile(self, x: np.ndarray) -> np.ndarray:
+        """η at x, interpolated exactly as in the kernel (m)."""
+        grid_x = self.eta_start + self.eta_step * np.arange(self.eta_grid.size)
+        return np.interp(x, grid_x, self.eta_grid)
+
+
+class SystemState(NamedTuple):
+    """Displacements, velocities, accelerations and previous accelerations, updated in place.
+
+    q: rail modal coordinates (N_m,), s: block modal coordinates (N−1,), u: vehicle DOFs
+    (n_cars · d,), all down + (m, or rad for pitch), from the unloaded track.
+    """
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    qdd_prev: np.ndarray
+    s: np.ndarray
+    sd: np.ndarray
+    sdd: np.ndarray
+    sdd_prev: np.ndarray
+    u: np.ndarray
+    ud: np.ndarray
+    udd: np.ndarray
+    udd_prev: np.ndarray
+
+
+class Scratch(NamedTuple):
+    """Work arrays of one evaluation of the accelerations (allocated once per run)."""
+
+    sine_table: np.ndarray  # (N_m, n_wheels) Y_k(x_j)
+    wheel_work: np.ndarray  # (3, n_wheels) Chebyshev recurrence
+    rail_at_wheel: np.ndarray  # (n_wheels,) Z_r(x_j)
+    fold_disp: np.ndarray  # (N−1,) rail displacement folded onto block modes
+    fold_vel: np.ndarray  # (N−1,)
+    block_mode_force: np.ndarray  # (N−1,) fastener force per block mode
+    wheel_x: np.ndarray  # (n_wheels,) wheel positions (m)
+    compression: np.ndarray  # (n_wheels,) δ (m)
+    wheel_force: np.ndarray  # (n_wheels,) wheel–rail forces (N)
+
+
+class Outputs(NamedTuple):
+    """Recorded histories, index 0 = initial state (SI, down +)."""
+
+    block_force: np.ndarray  # (nt,) K_s Z_s + C_s Ż_s under the monitored block
+    block_disp: np.ndarray  # (nt,)
+    rail_disp: np.ndarray  # (nt,)
+    wheel_force: np.ndarray  # (n_wheels, nt)
+    wheel_acc: np.ndarray  # (n_wheels, nt)
+    body_acc: np.ndarray  # (n_cars, nt)
+
+
+class ContactLog(NamedTuple):
+    """Loss-of-contact bookkeeping of the kernel."""
+
+    in_contact: np.ndarray  # (n_wheels,) bool
+    open_event: np.ndarray  # (n_wheels,) row of the wheel's open event, −1 if none
+    events: np.ndarray  # (MAX_CONTACT_EVENTS, 4) wheel, t_start, x_start, t_end
+    event_count: np.ndarray  # (1,) events so far, including those past the capacity
+
+
+@dataclass(frozen=True)
+class Integration:
+    """Result of :func:`integrate`: the recorded outputs and how the run ended."""
+
+    outputs: Outputs
+    diverged: int | None  # output index where the response diverged, None if it did not
+    events: np.ndarray  # (n, 4) logged contact-loss rows, open ones closed at the end
+    n_events: int  # all contact-loss events, including those past the log's capacity
+
+
+# ---- assembly (public: the tests and benchmarks build the kernel inputs with these) ----------
+def _block_mode_weights(n_spacings: int, block: int) -> np.ndarray:
+    """w_r = √(2/N) sin(rπi/N), r = 1..N−1, for block i."""
+    r = np.arange(1, n_spacings)
+    return math.sqrt(2.0 / n_spacings) * np.sin(r * math.pi * block / n_spacings)
+
+
+def assemble_track(scenario: Scenario) -> TrackSystem:
+    """Track record for the scenario's rail length and number of rail modes.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Uses ``track`` (rail and support values, MODEL.md §2), ``rail_length`` and
+        ``rail_modes``.
+
+    Returns
+    -------
+    TrackSystem
+        ω_k² = (EI/m_r)(kπ/L)⁴; the fold of rail mode k onto block mode ρ(k) (k mod 2N folded
+        into 1..N−1, sign σ_k); b = 1/√(m_r L_s); the monitored block at mid-rail.
+    """
     track = scenario.track
-    length = scenario.rail_length
+    length = float(scenario.rail_length)
     n_spacings = round(length / track.block_spacing)
     k = np.arange(1, scenario.rail_modes + 1)
     omega2 = track.bending_stiffness / track.rail_mass * (k * math.pi / length) ** 4
@@ -135,34 +290,53 @@ def _track_system(scenario: Scenario) -> _TrackSystem:
     upper = remainder > n_spacings
     fold = np.where(upper, 2 * n_spacings - remainder, remainder)
     coupled = (fold > 0) & (fold < n_spacings)
-    return _TrackSystem(
+    mode_amplitude = math.sqrt(2.0 / (track.rail_mass * length))
+    wavenumber_unit = math.pi / length
+    monitored = n_spacings // 2
+    monitored_x = monitored * length / n_spacings
+    return TrackSystem(
         length=length,
         n_spacings=n_spacings,
         omega2=omega2,
         fold_index=np.where(coupled, fold - 1, -1).astype(np.int64),
         fold_sign=np.where(coupled, np.where(upper, -1.0, 1.0), 0.0),
         block_gain=1.0 / math.sqrt(track.rail_mass * track.block_spacing),
-        mode_amplitude=math.sqrt(2.0 / (track.rail_mass * length)),
-        fastener_k=track.fastener_stiffness,
-        fastener_c=track.fastener_damping,
-        pad_k=track.pad_stiffness,
-        pad_c=track.pad_damping,
-        block_mass=track.block_mass,
+        mode_amplitude=mode_amplitude,
+        wavenumber_unit=wavenumber_unit,
+        fastener_k=float(track.fastener_stiffness),
+        fastener_c=float(track.fastener_damping),
+        pad_k=float(track.pad_stiffness),
+        pad_c=float(track.pad_damping),
+        block_mass=float(track.block_mass),
+        support_k=float(track.support_stiffness),
+        monitored_block=monitored,
+        monitored_block_weights=_block_mode_weights(n_spacings, monitored),
+        monitored_rail_shapes=mode_amplitude * np.sin(k * monitored_x * wavenumber_unit),
     )
 
 
-def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
+def assemble_vehicle(scenario: Scenario) -> VehicleSystem:
     """Per-car mass, stiffness, damping and gravity of the one-rail vehicle model.
 
-    Every mass and inertia is halved (one rail), suspensions are per side (MODEL.md §1). The
-    single bogie carries a quarter of the car body in bounce only; a full car has body bounce
-    and pitch, two bogies in bounce and pitch and four wheelsets. Longitudinal positions grow
-    backwards along the train, so the wheel order follows ``Train.axle_offsets``.
+    Every mass and inertia is halved (one rail), suspensions are per side (MODEL.md §1).
+    The single bogie carries a quarter of the car body in bounce only; a full car has body
+    bounce and pitch, two bogies in bounce and pitch and four wheelsets. Longitudinal positions
+    grow backwards along the train, so the wheel order follows ``Train.axle_offsets``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Uses ``vehicle`` and ``train``.
+
+    Returns
+    -------
+    VehicleSystem
+        DOFs per car, single bogie: body bounce, bogie bounce and pitch, wheelsets 1–2; full
+        car: body bounce and pitch, (bogie bounce, pitch) × 2, wheelsets 1–4.
     """
     veh, train = scenario.vehicle, scenario.train
     half_wheelbase = 0.5 * train.wheelbase
     if train.single_bogie:
-        # DOFs: body bounce, bogie bounce, bogie pitch, wheelset 1, wheelset 2
         masses = [
             veh.car_body_mass / 4,
             veh.bogie_mass / 2,
@@ -175,7 +349,6 @@ def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
         bogies = [(1, 2)]
         wheels = [3, 4]
     else:
-        # DOFs: body bounce, body pitch, (bogie bounce, bogie pitch) × 2, wheelsets 1–4
         masses = [
             veh.car_body_mass / 2,
             scenario.car_body_pitch_inertia / 2,
@@ -212,7 +385,7 @@ def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
     mass = np.array(masses)
     gravity = np.where(translational, mass * GRAVITY, 0.0)
     n_cars = 1 if train.single_bogie else train.n_cars
-    return _VehicleSystem(
+    return VehicleSystem(
         inv_mass=np.tile(1.0 / mass, (n_cars, 1)),
         stiffness=np.tile(stiffness, (n_cars, 1, 1)),
         damping=np.tile(damping, (n_cars, 1, 1)),
@@ -222,13 +395,96 @@ def _vehicle_system(scenario: Scenario) -> _VehicleSystem:
     )
 
 
-def _vehicle_static(
-    vehicle: _VehicleSystem, wheel_disp: np.ndarray, wheel_vel: np.ndarray
+def wheel_start_positions(scenario: Scenario) -> np.ndarray:
+    """Wheel positions at t = 0 (m): the leading axle ``approach_distance`` before mid-rail.
+
+    Parameters
+    ----------
+    scenario : Scenario
+
+    Returns
+    -------
+    ndarray
+        (n_wheels,) rail coordinates (m), leading axle first.
+    """
+    return (
+        0.5 * scenario.rail_length
+        - scenario.numerics.approach_distance
+        - np.asarray(scenario.train.axle_offsets, dtype=float)
+    )
+
+
+def assemble_wheels(
+    scenario: Scenario, duration_s: float, prescribed_load_N: np.ndarray | None = None
+) -> WheelInputs:
+    """Wheel record for ``scenario``, with the irregularity sampled where the wheels run.
+
+    Profile positions are measured from the monitored block, so the track under it does not
+    change when a numerics setting changes the rail length. The profile is sampled every
+    ``PROFILE_GRID_STEP`` m (or λ_min/100 if finer) for the kernel's linear interpolation.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Uses ``train``, ``track.hertz_constant``, ``irregularity``, ``numerics``.
+    duration_s : float
+        Time the wheels run (s); the profile covers their travel.
+    prescribed_load_N : array_like, optional
+        (n_wheels,) constant moving loads (N) that replace the vehicle and the Hertz contact
+        (the moving-load model); None for the coupled vehicle.
+
+    Returns
+    -------
+    WheelInputs
+    """
+    speed = float(scenario.train.speed)
+    x0 = wheel_start_positions(scenario)
+    eta_step = min(PROFILE_GRID_STEP, scenario.irregularity.wavelength_min / 100.0)
+    start = x0.min() - eta_step
+    n_grid = math.ceil((x0.max() + speed * duration_s - start) / eta_step) + 2
+    grid = start + eta_step * np.arange(n_grid)
+    if prescribed_load_N is None:
+        prescribed = np.array([-1.0])
+    else:
+        prescribed = np.array(prescribed_load_N, dtype=float)
+        if prescribed.shape != x0.shape or np.any(prescribed < 0.0):
+            raise ValueError(
+                f"prescribed_load_N = {prescribed_load_N!r}: needs {x0.size} loads ≥ 0 N "
+                "(one per wheel)"
+            )
+    return WheelInputs(
+        x0=x0,
+        speed=speed,
+        hertz_constant=float(scenario.track.hertz_constant),
+        prescribed_load=prescribed,
+        eta_grid=np.ascontiguousarray(
+            irregularity.profile_for(scenario.irregularity, grid - 0.5 * scenario.rail_length),
+            dtype=float,
+        ),
+        eta_start=float(start),
+        eta_step=float(eta_step),
+    )
+
+
+# ---- statics -----------------------------------------------------------------------------------
+def vehicle_equilibrium(
+    vehicle: VehicleSystem, wheel_disp: np.ndarray, wheel_vel: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Vehicle equilibrium on wheelsets at given displacements (and quasi-static velocities).
 
-    Returns the flat DOF displacements and velocities and the wheel–rail forces (N), which do
-    not depend on the wheel displacements (the vehicle is statically determinate).
+    Parameters
+    ----------
+    vehicle : VehicleSystem
+    wheel_disp, wheel_vel : ndarray
+        (n_wheels,) wheelset displacements (m, down +) and velocities (m/s).
+
+    Returns
+    -------
+    u, ud : ndarray
+        Flat DOF displacements and velocities (n_cars · d,).
+    wheel_force : ndarray
+        (n_wheels,) wheel–rail forces (N); they do not depend on the wheel displacements (the
+        vehicle is statically determinate).
     """
     n_cars, n_dof = vehicle.inv_mass.shape
     per_car = vehicle.wheel_dof.shape[1]
@@ -255,12 +511,23 @@ def _vehicle_static(
     return u, v, force
 
 
-def _track_static(track: _TrackSystem, modal_load: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def track_equilibrium(track: TrackSystem, modal_load: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Static rail modal coordinates q and block modal coordinates s under modal loads.
 
     Solves ω_k² q_k + σ_k b F̂_ρ = P_k, F̂_ρ = K_r (b Σ σ_k q_k − s_ρ) = K_s s_ρ exactly, one
     block mode at a time (O(N_m)); the same linear map turns modal load *rates* into the
     quasi-static velocities.
+
+    Parameters
+    ----------
+    track : TrackSystem
+    modal_load : ndarray
+        (N_m,) modal loads P_k = Σ_j p_j Y_k(x_j) (N/√kg).
+
+    Returns
+    -------
+    q, s : ndarray
+        (N_m,) and (N−1,) modal coordinates.
     """
     coupled = track.fold_index >= 0
     index = track.fold_index[coupled]
@@ -269,238 +536,138 @@ def _track_static(track: _TrackSystem, modal_load: np.ndarray) -> tuple[np.ndarr
     n_block_modes = track.n_spacings - 1
     free_disp = np.bincount(index, sign * modal_load[coupled] / w2, n_block_modes)
     compliance = np.bincount(index, 1.0 / w2, n_block_modes)
-    k_series = track.fastener_k * track.pad_k / (track.fastener_k + track.pad_k)
     b = track.block_gain
-    block_force = k_series * b * free_disp / (1.0 + k_series * b * b * compliance)
+    block_force = track.support_k * b * free_disp / (1.0 + track.support_k * b * b * compliance)
     q = modal_load / track.omega2
     q[coupled] -= sign * b * block_force[index] / w2
     return q, block_force / track.pad_k
 
 
-@dataclass(frozen=True)
-class _Model:
-    """Everything the kernel needs for one passage, as plain numbers and arrays."""
-
-    track: _TrackSystem
-    vehicle: _VehicleSystem
-    wheel_x0: np.ndarray  # wheel positions at t = 0 (m), leading axle first
-    speed: float  # m/s
-    hertz_constant: float  # G (m/N^(2/3))
-    prescribed_load: np.ndarray  # wheel loads (N) replacing Hertz contact, or [-1.0]
-    eta_grid: np.ndarray  # irregularity η (m) on a uniform grid
-    eta_start: float
-    eta_step: float
-    monitored_block: int  # block index i (1..N−1) whose invert force is recorded
-
-    @property
-    def monitored_x(self) -> float:
-        """Position of the monitored block (m)."""
-        return self.monitored_block * self.track.length / self.track.n_spacings
-
-    def profile(self, x: np.ndarray) -> np.ndarray:
-        """η at x, interpolated exactly as in the kernel (m)."""
-        grid_x = self.eta_start + self.eta_step * np.arange(self.eta_grid.size)
-        return np.interp(x, grid_x, self.eta_grid)
+def static_wheel_loads(vehicle: VehicleSystem, wheels: WheelInputs) -> np.ndarray:
+    """Wheel–rail forces at equilibrium (N): the prescribed loads or the vehicle's weight."""
+    if wheels.prescribed_load[0] >= 0.0:
+        return wheels.prescribed_load.copy()
+    n_wheels = wheels.x0.size
+    return vehicle_equilibrium(vehicle, np.zeros(n_wheels), np.zeros(n_wheels))[2]
 
 
-def _wheel_start_positions(scenario: Scenario) -> np.ndarray:
-    """Wheel positions at t = 0 (m): the leading axle ``approach_distance`` before mid-rail."""
-    return (
-        0.5 * scenario.rail_length
-        - scenario.numerics.approach_distance
-        - np.asarray(scenario.train.axle_offsets, dtype=float)
-    )
-
-
-def _build_model(scenario: Scenario, duration: float) -> _Model:
-    """Kernel data for ``scenario``, with the irregularity sampled where the wheels run.
-
-    Profile positions are measured from the monitored block, so the track under it does not
-    change when a numerics setting changes the rail length.
-    """
-    track = _track_system(scenario)
-    speed = scenario.train.speed
-    wheel_x0 = _wheel_start_positions(scenario)
-    eta_step = min(PROFILE_GRID_STEP, scenario.irregularity.wavelength_min / 100.0)
-    start = wheel_x0.min() - eta_step
-    n_grid = math.ceil((wheel_x0.max() + speed * duration - start) / eta_step) + 2
-    grid = start + eta_step * np.arange(n_grid)
-    return _Model(
-        track=track,
-        vehicle=_vehicle_system(scenario),
-        wheel_x0=wheel_x0,
-        speed=speed,
-        hertz_constant=scenario.track.hertz_constant,
-        prescribed_load=np.array([-1.0]),
-        eta_grid=np.ascontiguousarray(
-            irregularity.profile_for(scenario.irregularity, grid - 0.5 * scenario.rail_length),
-            dtype=float,
-        ),
-        eta_start=float(start),
-        eta_step=eta_step,
-        monitored_block=track.n_spacings // 2,
-    )
-
-
-def _static_loads(model: _Model) -> np.ndarray:
-    """Wheel–rail forces (N) at equilibrium: the prescribed loads or the vehicle's weight."""
-    if model.prescribed_load[0] >= 0.0:
-        return model.prescribed_load.copy()
-    n_wheels = model.wheel_x0.size
-    return _vehicle_static(model.vehicle, np.zeros(n_wheels), np.zeros(n_wheels))[2]
-
-
-def _initial_state(model: _Model) -> dict[str, np.ndarray]:
+def static_equilibrium(
+    scenario: Scenario, track: TrackSystem, vehicle: VehicleSystem, wheels: WheelInputs
+) -> SystemState:
     """Static equilibrium under the wheel loads, with the quasi-static rates of steady motion.
 
     Displacements: track under the static wheel loads, wheels at rail + η + Hertz compression
-    G p^{2/3}, vehicle in equilibrium on them. Velocities: the time derivative of that
-    solution as the loads move at the train speed, so a smooth-rail run starts without a drop
-    or a jolt.
+    G p^{2/3} (``scenario.track.hertz_compression``), vehicle in equilibrium on them.
+    Velocities: the time derivative of that solution as the loads move at the train speed, so
+    a smooth-rail run starts without a drop or a jolt. Accelerations are zero until
+    :func:`integrate` evaluates them.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Its ``track`` gives the Hertz compression.
+    track, vehicle, wheels : TrackSystem, VehicleSystem, WheelInputs
+        From the ``assemble_*`` functions.
+
+    Returns
+    -------
+    SystemState
     """
-    track, vehicle, x0 = model.track, model.vehicle, model.wheel_x0
-    loads = _static_loads(model)
+    x0 = wheels.x0
+    loads = static_wheel_loads(vehicle, wheels)
     shapes = track.mode_shapes(x0)
     slopes = track.mode_slopes(x0)
-    q, s = _track_static(track, shapes @ loads)
-    qd, sd = _track_static(track, model.speed * (slopes @ loads))
-    eta = model.profile(x0)
-    eta_slope = (
-        model.profile(x0 + 0.5 * model.eta_step) - model.profile(x0 - 0.5 * model.eta_step)
-    ) / model.eta_step
-    wheel_disp = shapes.T @ q + eta + model.hertz_constant * loads ** (2.0 / 3.0)
-    wheel_vel = model.speed * (slopes.T @ q + eta_slope) + shapes.T @ qd
-    u, ud, _ = _vehicle_static(vehicle, wheel_disp, wheel_vel)
-    return {
-        "q": q,
-        "qd": qd,
-        "qdd": np.zeros_like(q),
-        "qdd_prev": np.zeros_like(q),
-        "s": s,
-        "sd": sd,
-        "sdd": np.zeros_like(s),
-        "sdd_prev": np.zeros_like(s),
-        "u": u,
-        "ud": ud,
-        "udd": np.zeros_like(u),
-        "udd_prev": np.zeros_like(u),
-    }
+    q, s = track_equilibrium(track, shapes @ loads)
+    qd, sd = track_equilibrium(track, wheels.speed * (slopes @ loads))
+    eta = wheels.profile(x0)
+    half = 0.5 * wheels.eta_step
+    eta_slope = (wheels.profile(x0 + half) - wheels.profile(x0 - half)) / wheels.eta_step
+    wheel_disp = shapes.T @ q + eta + scenario.track.hertz_compression(loads)
+    wheel_vel = wheels.speed * (slopes.T @ q + eta_slope) + shapes.T @ qd
+    u, ud, _ = vehicle_equilibrium(vehicle, wheel_disp, wheel_vel)
+    return SystemState(
+        q=q,
+        qd=qd,
+        qdd=np.zeros_like(q),
+        qdd_prev=np.zeros_like(q),
+        s=s,
+        sd=sd,
+        sdd=np.zeros_like(s),
+        sdd_prev=np.zeros_like(s),
+        u=u,
+        ud=ud,
+        udd=np.zeros_like(u),
+        udd_prev=np.zeros_like(u),
+    )
 
 
-def _integrate(
-    model: _Model,
-    state: dict[str, np.ndarray],
+# ---- time stepping -------------------------------------------------------------------------------
+def integrate(
+    track: TrackSystem,
+    vehicle: VehicleSystem,
+    wheels: WheelInputs,
+    state: SystemState,
     n_steps: int,
     dt: float,
     progress: Callable[[float], None] | None = None,
-) -> dict:
-    """Run the kernel for ``n_steps`` from ``state`` (modified in place); outputs and status.
+) -> Integration:
+    """Run the kernel for ``n_steps`` from ``state`` (modified in place).
 
-    The kernel runs in at most ``PROGRESS_CALLS`` chunks so ``progress`` can be told the
-    fraction done. Returns a dict of output arrays (index 0 = initial state) plus ``"diverged"``
-    (output index where the response diverged, or None), ``"events"`` and ``"n_events"``.
+    The accelerations at t = 0 are evaluated first (``n_steps = 0`` does only that). The kernel
+    then runs in at most ``PROGRESS_CALLS`` chunks so ``progress`` can be told the fraction
+    done.
+
+    Parameters
+    ----------
+    track, vehicle, wheels : TrackSystem, VehicleSystem, WheelInputs
+    state : SystemState
+        Initial state, e.g. from :func:`static_equilibrium`; holds the final state on return.
+    n_steps : int
+        Time steps of Zhai's method (φ = ψ = ½).
+    dt : float
+        Time step (s).
+    progress : callable(fraction), optional
+
+    Returns
+    -------
+    Integration
+        Outputs at n_steps + 1 instants (index 0 = initial state) and how the run ended.
     """
-    track, vehicle = model.track, model.vehicle
-    n_wheels = model.wheel_x0.size
-    n_bodies = vehicle.inv_mass.shape[0]
+    n_wheels = wheels.x0.size
+    n_modes, n_block_modes = track.omega2.size, track.n_spacings - 1
     nt = n_steps + 1
-    out = {
-        "block_force": np.zeros(nt),
-        "block_disp": np.zeros(nt),
-        "rail_disp": np.zeros(nt),
-        "wheel_force": np.zeros((n_wheels, nt)),
-        "wheel_acc": np.zeros((n_wheels, nt)),
-        "body_acc": np.zeros((n_bodies, nt)),
-    }
-    block_weight = track.block_mode_weights(model.monitored_block)
-    rail_weight = track.mode_shapes(np.array([model.monitored_x]))[:, 0].copy()
-    track_args = (
-        track.omega2,
-        track.fold_index,
-        track.fold_sign,
-        track.block_gain,
-        track.mode_amplitude,
-        track.wavenumber_unit,
-        track.fastener_k,
-        track.fastener_c,
-        track.pad_k,
-        track.pad_c,
-        track.block_mass,
+    outputs = Outputs(
+        block_force=np.zeros(nt),
+        block_disp=np.zeros(nt),
+        rail_disp=np.zeros(nt),
+        wheel_force=np.zeros((n_wheels, nt)),
+        wheel_acc=np.zeros((n_wheels, nt)),
+        body_acc=np.zeros((vehicle.inv_mass.shape[0], nt)),
     )
-    vehicle_args = (
-        vehicle.inv_mass,
-        vehicle.stiffness,
-        vehicle.damping,
-        vehicle.gravity_force,
-        vehicle.wheel_dof,
+    scratch = Scratch(
+        sine_table=np.empty((n_modes, n_wheels)),
+        wheel_work=np.empty((3, n_wheels)),
+        rail_at_wheel=np.empty(n_wheels),
+        fold_disp=np.empty(n_block_modes),
+        fold_vel=np.empty(n_block_modes),
+        block_mode_force=np.empty(n_block_modes),
+        wheel_x=np.empty(n_wheels),
+        compression=np.empty(n_wheels),
+        wheel_force=np.empty(n_wheels),
     )
-    wheel_args = (
-        model.wheel_x0,
-        model.speed,
-        model.hertz_constant,
-        model.prescribed_load,
-        model.eta_grid,
-        model.eta_start,
-        model.eta_step,
+    kernels.accelerations(0.0, state, track, vehicle, wheels, scratch)
+    kernels.record(0, state, track, vehicle, scratch, outputs)
+    in_contact = scratch.wheel_force > 0.0
+    contact = ContactLog(
+        in_contact=in_contact,
+        open_event=np.full(n_wheels, -1, dtype=np.int64),
+        events=np.zeros((MAX_CONTACT_EVENTS, 4)),
+        event_count=np.zeros(1, dtype=np.int64),
     )
-    st = state
-    scratch = (
-        np.empty((track.omega2.size, n_wheels)),
-        np.empty((3, n_wheels)),
-        np.empty(n_wheels),
-        np.empty(track.n_spacings - 1),
-        np.empty(track.n_spacings - 1),
-        np.empty(track.n_spacings - 1),
-        np.empty(n_wheels),
-        np.empty(n_wheels),
-    )
-    wheel_force = np.empty(n_wheels)
-    kernels.accelerations(
-        0.0,
-        st["q"],
-        st["qd"],
-        st["qdd"],
-        st["s"],
-        st["sd"],
-        st["sdd"],
-        st["u"],
-        st["ud"],
-        st["udd"],
-        *track_args,
-        *vehicle_args,
-        *wheel_args,
-        *scratch,
-        wheel_force,
-    )
-    kernels.record(
-        0,
-        st["q"],
-        st["s"],
-        st["sd"],
-        st["udd"],
-        vehicle.inv_mass.shape[1],
-        vehicle.wheel_dof,
-        vehicle.body_dof,
-        track.pad_k,
-        track.pad_c,
-        block_weight,
-        rail_weight,
-        wheel_force,
-        out["block_force"],
-        out["block_disp"],
-        out["rail_disp"],
-        out["wheel_force"],
-        out["wheel_acc"],
-        out["body_acc"],
-    )
-    in_contact = wheel_force > 0.0
-    open_event = np.full(n_wheels, -1, dtype=np.int64)
-    events = np.zeros((MAX_CONTACT_EVENTS, 4))
-    event_count = np.zeros(1, dtype=np.int64)
     for j in np.flatnonzero(~in_contact):  # already off the rail at t = 0
-        events[event_count[0]] = (j, 0.0, model.wheel_x0[j], -1.0)
-        open_event[j] = event_count[0]
-        event_count[0] += 1
+        contact.events[contact.event_count[0]] = (j, 0.0, wheels.x0[j], -1.0)
+        contact.open_event[j] = contact.event_count[0]
+        contact.event_count[0] += 1
     diverged = None
     chunk = max(1, math.ceil(n_steps / PROGRESS_CALLS))
     for start in range(0, n_steps, chunk):
@@ -511,50 +678,28 @@ def _integrate(
             dt,
             ZHAI_PHI,
             ZHAI_PSI,
-            st["q"],
-            st["qd"],
-            st["qdd"],
-            st["qdd_prev"],
-            st["s"],
-            st["sd"],
-            st["sdd"],
-            st["sdd_prev"],
-            st["u"],
-            st["ud"],
-            st["udd"],
-            st["udd_prev"],
-            *track_args,
-            *vehicle_args,
-            vehicle.body_dof,
-            *wheel_args,
-            block_weight,
-            rail_weight,
             DIVERGENCE_COMPRESSION,
-            in_contact,
-            open_event,
-            events,
-            event_count,
-            out["block_force"],
-            out["block_disp"],
-            out["rail_disp"],
-            out["wheel_force"],
-            out["wheel_acc"],
-            out["body_acc"],
+            state,
+            track,
+            vehicle,
+            wheels,
+            scratch,
+            outputs,
+            contact,
         )
         if status != kernels.RUNNING:
             diverged = int(status)
             break
-        if not all(np.all(np.isfinite(a)) for a in (st["q"], st["s"], st["u"])):
+        if not all(np.all(np.isfinite(a)) for a in (state.q, state.s, state.u)):
             diverged = stop  # a mode the outputs do not see has blown up
             break
         if progress is not None:
             progress(stop / n_steps)
-    n_events = int(event_count[0])
-    events = events[: min(n_events, MAX_CONTACT_EVENTS)]
+    n_events = int(contact.event_count[0])
+    events = contact.events[: min(n_events, MAX_CONTACT_EVENTS)]
     still_open = events[:, 3] < 0.0
-    last_t = (diverged if diverged is not None else n_steps) * dt
-    events[still_open, 3] = last_t
-    return {**out, "diverged": diverged, "events": events, "n_events": n_events}
+    events[still_open, 3] = (diverged if diverged is not None else n_steps) * dt
+    return Integration(outputs=outputs, diverged=diverged, events=events, n_events=n_events)
 
 
 # ---- public API -----------------------------------------------------------------------------
@@ -603,8 +748,8 @@ def stable_time_step(scenario: Scenario) -> float:
         Largest recommended Δt (s).
     """
     track = scenario.track
-    system = _track_system(scenario)
-    vehicle = _vehicle_system(scenario)
+    system = assemble_track(scenario)
+    vehicle = assemble_vehicle(scenario)
     shared = np.bincount(system.fold_index[system.fold_index >= 0]).max(initial=1)
     gain = math.sqrt(shared) * system.block_gain
 
@@ -620,7 +765,7 @@ def stable_time_step(scenario: Scenario) -> float:
     vehicle_c = np.linalg.eigvalsh(scale[:, None] * vehicle.damping[0] * scale).max()
     load = HERTZ_OVERLOAD * scenario.vehicle.static_wheel_load
     k_hertz = 1.5 * load ** (1.0 / 3.0) / track.hertz_constant
-    shapes = system.mode_shapes(_wheel_start_positions(scenario))
+    shapes = system.mode_shapes(wheel_start_positions(scenario))
     wheel_inv_mass = vehicle.inv_mass[:, vehicle.wheel_dof[0]].ravel()
     gram = shapes.T @ shapes + np.diag(wheel_inv_mass)
     omega2 = (
@@ -634,8 +779,20 @@ def stable_time_step(scenario: Scenario) -> float:
     return STABILITY_SAFETY * zhai_damped_limit(math.sqrt(omega2), gamma)
 
 
-def _n_steps(scenario: Scenario) -> int:
-    """Time steps covering the passage (a ratio within rounding of a whole number is one)."""
+def n_time_steps(scenario: Scenario) -> int:
+    """Time steps covering the passage at ``numerics.dt``.
+
+    A ratio passage_duration/Δt within rounding (1e-6) of a whole number is that number,
+    otherwise it is rounded up.
+
+    Parameters
+    ----------
+    scenario : Scenario
+
+    Returns
+    -------
+    int
+    """
     ratio = scenario.passage_duration / scenario.numerics.dt
     nearest = round(ratio)
     return nearest if abs(ratio - nearest) < 1e-6 * max(1.0, ratio) else math.ceil(ratio)
@@ -666,14 +823,14 @@ def check_inputs(scenario: Scenario) -> float:
         raise ValueError(
             f"numerics.dt = {numerics.dt:g} s is above the explicit stability limit of this "
             f"scenario ({scenario.rail_modes} rail modes, highest ω ≈ "
-            f"{math.sqrt(_track_system(scenario).omega2[-1]):.4g} rad/s); allowed range "
+            f"{math.sqrt(assemble_track(scenario).omega2[-1]):.4g} rad/s); allowed range "
             f"(0, {limit:.4g}] s: lower the time step or the number of rail modes"
         )
     n_channels = 3 + 2 * train.n_wheels + (1 if train.single_bogie else train.n_cars)
-    n_values = (_n_steps(scenario) + 1) * n_channels
+    n_values = (n_time_steps(scenario) + 1) * n_channels
     if n_values > MAX_OUTPUT_VALUES:
         raise ValueError(
-            f"numerics.dt = {numerics.dt:g} s gives {_n_steps(scenario)} time steps for a "
+            f"numerics.dt = {numerics.dt:g} s gives {n_time_steps(scenario)} time steps for a "
             f"{scenario.passage_duration:.3g} s passage, {n_values:.3g} output values in all; "
             f"allowed up to {MAX_OUTPUT_VALUES:.3g}: raise the time step or the speed"
         )
@@ -701,7 +858,7 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
     track, train = scenario.track, scenario.train
     beta, modulus = track.winkler_beta, track.winkler_modulus
     x_mon = 0.5 * scenario.rail_length
-    x0 = _wheel_start_positions(scenario)
+    x0 = wheel_start_positions(scenario)
     xi = np.abs(x0[:, None] + train.speed * np.asarray(t_s)[None, :] - x_mon) * beta
     rail = (
         scenario.vehicle.static_wheel_load
@@ -710,7 +867,7 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
         * np.exp(-xi)
         * (np.cos(xi) + np.sin(xi))
     ).sum(axis=0)
-    return rail * track.fastener_stiffness / (track.fastener_stiffness + track.pad_stiffness)
+    return rail * track.support_stiffness / track.pad_stiffness  # Z_s = F/K_s, F = k L_s w
 
 
 def simulate(
@@ -744,44 +901,45 @@ def simulate(
     """
     stable_dt = check_inputs(scenario)
     dt = scenario.numerics.dt
-    n_steps = _n_steps(scenario)
-    model = _build_model(scenario, n_steps * dt)
-    state = _initial_state(model)
-    run = _integrate(model, state, n_steps, dt, progress)
-    nt = n_steps + 1 if run["diverged"] is None else run["diverged"]
+    n_steps = n_time_steps(scenario)
+    track, vehicle = assemble_track(scenario), assemble_vehicle(scenario)
+    wheels = assemble_wheels(scenario, n_steps * dt)
+    state = static_equilibrium(scenario, track, vehicle, wheels)
+    run = integrate(track, vehicle, wheels, state, n_steps, dt, progress)
+    nt = n_steps + 1 if run.diverged is None else run.diverged
     t = dt * np.arange(nt)
     offsets = np.asarray(scenario.train.axle_offsets, dtype=float)
     warnings = []
-    if run["diverged"] is not None:
+    if run.diverged is not None:
         warnings.append(
             f"the integration diverged at t = {nt * dt:.4g} s (a wheel–rail compression passed "
             f"{DIVERGENCE_COMPRESSION * 1e3:g} mm or became non-finite) and was stopped; the "
             f"record ends there. The time step {dt:g} s is too large for this scenario: use a "
             f"smaller numerics.dt (estimated limit {stable_dt:.3g} s)."
         )
-    events = _contact_events(run["events"])
-    if run["n_events"]:
-        warnings.append(_contact_loss_message(events, run["n_events"]))
+    events = _contact_events(run.events)
+    if run.n_events:
+        warnings.append(_contact_loss_message(events, run.n_events))
     return VehicleTrackResult(
         t_s=t,
-        block_force_N=run["block_force"][:nt],
-        block_disp_m=run["block_disp"][:nt],
-        rail_disp_m=run["rail_disp"][:nt],
-        wheel_force_N=run["wheel_force"][:, :nt],
-        wheel_acc_m_s2=run["wheel_acc"][:, :nt],
-        car_body_acc_m_s2=run["body_acc"][:, :nt],
-        axle_pass_times_s=(scenario.numerics.approach_distance + offsets) / model.speed,
+        block_force_N=run.outputs.block_force[:nt],
+        block_disp_m=run.outputs.block_disp[:nt],
+        rail_disp_m=run.outputs.rail_disp[:nt],
+        wheel_force_N=run.outputs.wheel_force[:, :nt],
+        wheel_acc_m_s2=run.outputs.wheel_acc[:, :nt],
+        car_body_acc_m_s2=run.outputs.body_acc[:, :nt],
+        axle_pass_times_s=(scenario.numerics.approach_distance + offsets) / wheels.speed,
         winkler_block_disp_m=winkler_block_displacement(scenario, t),
-        monitored_block_x_m=model.monitored_x,
+        monitored_block_x_m=track.monitored_x,
         contact_loss=events,
-        unstable=run["diverged"] is not None,
+        unstable=run.diverged is not None,
         warnings=warnings,
-        static_wheel_load_N=float(_static_loads(model)[0]),
+        static_wheel_load_N=float(static_wheel_loads(vehicle, wheels)[0]),
         dt_s=dt,
         stable_dt_s=stable_dt,
-        n_rail_modes=model.track.omega2.size,
-        rail_length_m=model.track.length,
-        speed_m_s=model.speed,
+        n_rail_modes=track.omega2.size,
+        rail_length_m=track.length,
+        speed_m_s=wheels.speed,
     )
 
 

@@ -3,7 +3,6 @@ qualitative claims. Most runs use the single bogie (64.8 m rail, 108 modes, ~10 
 ms each once compiled); the six-car train is run once per module.
 """
 
-import dataclasses
 import math
 
 import numpy as np
@@ -63,8 +62,7 @@ def test_static_wheel_loads_are_table_1(single_bogie):
     printed precision (±0.05 kN); equal to Vehicle.static_wheel_load to rounding (1e-12)."""
     scenario = Scenario.paper()
     scenario.train.single_bogie = single_bogie
-    model = vt._build_model(scenario, 1.0)
-    loads = vt._static_loads(model)
+    loads = vt.static_wheel_loads(vt.assemble_vehicle(scenario), vt.assemble_wheels(scenario, 1.0))
     assert loads.size == scenario.train.n_wheels
     np.testing.assert_allclose(loads, scenario.vehicle.static_wheel_load, rtol=1e-12)
     assert loads[0] == pytest.approx(TABLE_1_WHEEL_LOAD, abs=50.0)
@@ -75,11 +73,11 @@ def test_vehicle_mass_and_gravity_are_the_halved_car():
     (a quarter car body for the single bogie), exactly."""
     scenario = Scenario.paper()
     veh = scenario.vehicle
-    full = vt._vehicle_system(scenario)
+    full = vt.assemble_vehicle(scenario)
     car = veh.car_body_mass + 2 * veh.bogie_mass + 4 * veh.wheelset_mass
     np.testing.assert_allclose(full.gravity_force.sum(axis=1), car * 9.81 / 2, rtol=1e-14)
     scenario.train.single_bogie = True
-    bogie = vt._vehicle_system(scenario)
+    bogie = vt.assemble_vehicle(scenario)
     expected = (veh.car_body_mass / 4 + veh.bogie_mass / 2 + veh.wheelset_mass) * 9.81
     assert bogie.gravity_force.sum() == pytest.approx(expected, rel=1e-14)
 
@@ -117,11 +115,11 @@ def test_static_track_solution_equals_dense_solve(modes_per_spacing):
     scenario = smooth_single_bogie()
     n = round(scenario.rail_length / scenario.track.block_spacing)
     scenario.numerics.n_rail_modes = round(modes_per_spacing * n)
-    model = vt._build_model(scenario, 1.0)
-    loads = vt._static_loads(model)
-    q, s = vt._track_static(model.track, model.track.mode_shapes(model.wheel_x0) @ loads)
-    blocks = np.array([model.track.block_mode_weights(i) @ s for i in range(1, n)])
-    q_dense, blocks_dense = dense_static_track(scenario, model.wheel_x0, loads)
+    track, wheels = vt.assemble_track(scenario), vt.assemble_wheels(scenario, 1.0)
+    loads = vt.static_wheel_loads(vt.assemble_vehicle(scenario), wheels)
+    q, s = vt.track_equilibrium(track, track.mode_shapes(wheels.x0) @ loads)
+    blocks = np.array([track.block_mode_weights(i) @ s for i in range(1, n)])
+    q_dense, blocks_dense = dense_static_track(scenario, wheels.x0, loads)
     np.testing.assert_allclose(q, q_dense, atol=1e-9 * np.abs(q_dense).max())
     np.testing.assert_allclose(blocks, blocks_dense, atol=1e-9 * blocks_dense.max())
 
@@ -136,13 +134,13 @@ def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
     n = round(scenario.rail_length / scenario.track.block_spacing)
     scenario.numerics.n_rail_modes = round(modes_per_spacing * n)
     loads = np.array([61e3, 55e3])
-    model = dataclasses.replace(vt._build_model(scenario, 1.0), prescribed_load=loads)
-    tr = model.track
+    tr, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
+    wheels = vt.assemble_wheels(scenario, 1.0, prescribed_load_N=loads)
     rng = np.random.default_rng(7)
-    state = vt._initial_state(model)
+    state = vt.static_equilibrium(scenario, tr, vehicle, wheels)
     for name in ("q", "qd", "s", "sd"):
-        state[name][:] = rng.standard_normal(state[name].size) * 1e-4
-    vt._integrate(model, state, 0, 1e-4)  # zero steps: accelerations at t = 0 only
+        getattr(state, name)[:] = rng.standard_normal(getattr(state, name).size) * 1e-4
+    vt.integrate(tr, vehicle, wheels, state, 0, 1e-4)  # zero steps: accelerations at t = 0 only
 
     k = np.arange(1, tr.omega2.size + 1)[:, None]
     x_blocks = scenario.track.block_spacing * np.arange(1, n)
@@ -151,25 +149,25 @@ def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
     )
     dst = math.sqrt(2 / n) * np.sin(np.outer(np.arange(1, n), np.arange(1, n)) * np.pi / n)
     y_wheels = math.sqrt(2 / (scenario.track.rail_mass * tr.length)) * np.sin(
-        k * np.pi * model.wheel_x0[None, :] / tr.length
+        k * np.pi * wheels.x0[None, :] / tr.length
     )
-    z_block, v_block = dst @ state["s"], dst @ state["sd"]
-    fastener = tr.fastener_k * (phi.T @ state["q"] - z_block) + tr.fastener_c * (
-        phi.T @ state["qd"] - v_block
+    z_block, v_block = dst @ state.s, dst @ state.sd
+    fastener = tr.fastener_k * (phi.T @ state.q - z_block) + tr.fastener_c * (
+        phi.T @ state.qd - v_block
     )
-    rail_acc = -tr.omega2 * state["q"] - phi @ fastener + y_wheels @ loads
+    rail_acc = -tr.omega2 * state.q - phi @ fastener + y_wheels @ loads
     block_acc = (fastener - tr.pad_k * z_block - tr.pad_c * v_block) / tr.block_mass
-    np.testing.assert_allclose(state["qdd"], rail_acc, atol=1e-10 * np.abs(rail_acc).max())
-    np.testing.assert_allclose(dst @ state["sdd"], block_acc, atol=1e-10 * np.abs(block_acc).max())
+    np.testing.assert_allclose(state.qdd, rail_acc, atol=1e-10 * np.abs(rail_acc).max())
+    np.testing.assert_allclose(dst @ state.sdd, block_acc, atol=1e-10 * np.abs(block_acc).max())
 
 
 def test_hertz_law():
     """p = (δ/G)^{3/2} for δ > 0 and 0 otherwise (the wheel has left the rail)."""
     g = Scenario().track.hertz_constant
     load = 61140.825
-    assert vt.kernels.hertz_force(g * load ** (2 / 3), g) == pytest.approx(load, rel=1e-13)
-    assert vt.kernels.hertz_force(0.0, g) == 0.0
-    assert vt.kernels.hertz_force(-1e-6, g) == 0.0
+    assert vt.hertz_force(g * load ** (2 / 3), g) == pytest.approx(load, rel=1e-13)
+    assert vt.hertz_force(0.0, g) == 0.0
+    assert vt.hertz_force(-1e-6, g) == 0.0
 
 
 def test_static_start_is_equilibrium_with_hertz_compression():
@@ -177,17 +175,18 @@ def test_static_start_is_equilibrium_with_hertz_compression():
     is at rest: its accelerations are below 1e-6 g (the kernel's Chebyshev mode shapes agree
     with NumPy's sines to ~1e-13, i.e. force errors of ~1e-4 N)."""
     scenario = smooth_single_bogie()
-    model = vt._build_model(scenario, 1.0)
-    state = vt._initial_state(model)
-    loads = vt._static_loads(model)
-    rail = model.track.mode_shapes(model.wheel_x0).T @ state["q"]
-    compression = state["u"][[3, 4]] - rail
+    track, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
+    wheels = vt.assemble_wheels(scenario, 1.0)
+    state = vt.static_equilibrium(scenario, track, vehicle, wheels)
+    loads = vt.static_wheel_loads(vehicle, wheels)
+    rail = track.mode_shapes(wheels.x0).T @ state.q
+    compression = state.u[[3, 4]] - rail
     np.testing.assert_allclose(compression, scenario.track.hertz_compression(loads), rtol=1e-12)
     assert compression[0] == pytest.approx(81e-6, abs=0.5e-6)
-    out = vt._integrate(model, state, 0, scenario.numerics.dt)
-    np.testing.assert_allclose(out["wheel_force"][:, 0], loads, rtol=1e-9)
-    assert np.max(np.abs(out["wheel_acc"][:, 0])) < 1e-5
-    assert np.max(np.abs(out["body_acc"][:, 0])) < 1e-5
+    out = vt.integrate(track, vehicle, wheels, state, 0, scenario.numerics.dt).outputs
+    np.testing.assert_allclose(out.wheel_force[:, 0], loads, rtol=1e-9)
+    assert np.max(np.abs(out.wheel_acc[:, 0])) < 1e-5
+    assert np.max(np.abs(out.body_acc[:, 0])) < 1e-5
 
 
 def test_quasi_static_passage_matches_static_load_and_winkler_beam():
@@ -244,16 +243,15 @@ def test_moving_constant_load_on_simply_supported_beam():
     """
     scenario = smooth_single_bogie()
     dt = scenario.numerics.dt
-    n_steps = vt._n_steps(scenario)
-    model = vt._build_model(scenario, n_steps * dt)
+    n_steps = vt.n_time_steps(scenario)
     load = 1000.0
-    model = dataclasses.replace(
-        model,
-        track=dataclasses.replace(model.track, fastener_k=0.0, fastener_c=0.0),
-        prescribed_load=np.array([load, 0.0]),
-    )
-    out = vt._integrate(model, vt._initial_state(model), n_steps, dt)
-    assert out["diverged"] is None
+    # no supports: the series support stiffness goes with the fastener
+    track = vt.assemble_track(scenario)._replace(fastener_k=0.0, fastener_c=0.0, support_k=0.0)
+    vehicle = vt.assemble_vehicle(scenario)
+    wheels = vt.assemble_wheels(scenario, n_steps * dt, prescribed_load_N=[load, 0.0])
+    state = vt.static_equilibrium(scenario, track, vehicle, wheels)
+    run = vt.integrate(track, vehicle, wheels, state, n_steps, dt)
+    assert run.diverged is None
 
     tr = scenario.track
     length = scenario.rail_length
@@ -261,7 +259,7 @@ def test_moving_constant_load_on_simply_supported_beam():
     amp = math.sqrt(2 / (tr.rail_mass * length))
     omega = np.sqrt(tr.rail_E * tr.rail_I / tr.rail_mass) * (k * np.pi / length) ** 2
     forcing = k * np.pi * scenario.train.speed / length
-    phase = k * np.pi * model.wheel_x0[0] / length
+    phase = k * np.pi * wheels.x0[0] / length
     steady = load * amp / (omega**2 - forcing**2)
     q0 = load * amp * np.sin(phase) / omega**2
     qd0 = scenario.train.speed * load * amp * (k * np.pi / length) * np.cos(phase) / omega**2
@@ -275,8 +273,8 @@ def test_moving_constant_load_on_simply_supported_beam():
     )
     midspan = amp * np.sin(k * np.pi / 2) @ q
     assert forcing[0] / omega[0] > 1.2
-    np.testing.assert_allclose(out["rail_disp"], midspan, rtol=0, atol=1e-7 * midspan.max())
-    np.testing.assert_array_equal(out["block_disp"], 0.0)
+    np.testing.assert_allclose(run.outputs.rail_disp, midspan, rtol=0, atol=1e-7 * midspan.max())
+    np.testing.assert_array_equal(run.outputs.block_disp, 0.0)
 
 
 # ---- convergence -----------------------------------------------------------------------------
@@ -458,7 +456,7 @@ def test_unstable_run_is_stopped_flagged_and_explained(monkeypatch):
     monkeypatch.setattr(vt, "stable_time_step", lambda s: 1.0)
     result = simulate(scenario)
     assert result.unstable
-    assert result.t_s.size < vt._n_steps(scenario) // 2
+    assert result.t_s.size < vt.n_time_steps(scenario) // 2
     assert any("diverged" in w and "numerics.dt" in w for w in result.warnings)
     for array in (result.block_force_N, result.wheel_force_N, result.rail_disp_m):
         assert np.all(np.isfinite(array))
@@ -506,8 +504,7 @@ def test_runs_at_the_estimated_limit_stay_stable_across_the_parameter_ranges():
 def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
     """Function Δt → spectral radius of the Zhai amplification matrix of the linearised model
     (dense, written out from the equations of MODEL.md §1–3; state x_n, v_n, a_{n−1})."""
-    model = vt._build_model(scenario, 1.0)
-    track, vehicle = model.track, model.vehicle
+    track, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
     n_modes, n_blocks = track.omega2.size, track.n_spacings - 1
     n_dof = vehicle.inv_mass.shape[1]
     size = n_modes + n_blocks + n_dof
@@ -528,7 +525,7 @@ def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
     mass[car] = 1.0 / vehicle.inv_mass[0]
     load = scenario.vehicle.static_wheel_load
     k_hertz = 1.5 * load ** (1 / 3) / scenario.track.hertz_constant
-    shapes = track.mode_shapes(model.wheel_x0)
+    shapes = track.mode_shapes(vt.wheel_start_positions(scenario))
     for j, dof in enumerate(vehicle.wheel_dof[0]):
         a = np.zeros(size)
         a[n_modes + n_blocks + dof] = 1.0
