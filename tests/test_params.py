@@ -158,7 +158,7 @@ def test_dotted_set_parses_and_refuses():
     assert (s.train.speed_kmh, s.train.single_bogie, s.numerics.n_rail_modes) == (60.0, True, None)
     with pytest.raises(ValueError, match=r"train.speed_kmh = 'fast' is not a number"):
         s.set_value("train.speed_kmh", "fast")
-    with pytest.raises(ValueError, match=r"allowed range \(0, 400\]"):
+    with pytest.raises(ValueError, match=r"allowed range \[1, 400\]"):
         s.set_value("train.speed_kmh", "-5")
     with pytest.raises(KeyError, match="section.parameter"):
         s.set_value("speed", "5")
