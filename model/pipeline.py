@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from model.params import Scenario
+from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.settlement import TAIL_TRANSIT_TIMES, SoilResponse, soil_response
 from model.spectra import one_sided_psd
@@ -221,6 +221,7 @@ def run(
         Before computing, if the run is estimated to take longer than ``SLOW_RUN_SECONDS``.
     """
     scenario.validate()
+    check_record_padding(scenario)
     estimate = estimate_run(scenario)
     if estimate.total_seconds > SLOW_RUN_SECONDS:
         warnings.warn(estimate.slow_message(), SlowRunWarning, stacklevel=2)
@@ -321,6 +322,31 @@ def _time_step(t_s: np.ndarray) -> float:
     return float(t_s[1] - t_s[0])
 
 
+def check_record_padding(scenario: Scenario) -> None:
+    """Refuse a padded record too short for the response at the deepest output depth.
+
+    The soil stage's inverse FFT is periodic: a padded record shorter than the passage plus
+    ``TAIL_TRANSIT_TIMES`` shear-wave transits to ``numerics.max_depth`` wraps the deep response
+    onto itself, which lowers the deep peaks (e.g. by half at 35 m for a soft soil at
+    400 km/h) and can make them grow with depth.
+
+    Raises
+    ------
+    ScenarioError
+        Naming numerics.zero_pad_factor and the smallest value that suffices.
+    """
+    numerics, record = scenario.numerics, scenario.passage_duration
+    needed = record + TAIL_TRANSIT_TIMES * numerics.max_depth / scenario.soil.s_wave_speed
+    if numerics.zero_pad_factor * record < needed:
+        raise ScenarioError(
+            f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "
+            f"record to less than the passage plus the wave-travel tail to "
+            f"numerics.max_depth = {numerics.max_depth:g} m ({needed:.2f} s), which would "
+            f"wrap the deep response; allowed: at least {math.ceil(needed / record)} (or a "
+            "smaller max_depth)"
+        )
+
+
 def scenario_warnings(scenario: Scenario) -> list[str]:
     """Warnings for inputs where the model's simplifications start to matter (not errors)."""
     warnings = []
@@ -339,14 +365,6 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
             "loaded, which cuts the load history and lowers the soil response"
         )
     record = scenario.passage_duration
-    needed = record + TAIL_TRANSIT_TIMES * numerics.max_depth / scenario.soil.s_wave_speed
-    if numerics.zero_pad_factor * record < needed:
-        warnings.append(
-            f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "
-            f"record to less than the passage plus the wave-travel tail to "
-            f"{numerics.max_depth:g} m ({needed:.2f} s): the deep response is cut short; use "
-            f"at least {math.ceil(needed / record)}"
-        )
     segment = numerics.psd_segment
     if record < segment:
         warnings.append(

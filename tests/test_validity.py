@@ -91,6 +91,25 @@ def test_2_a_thick_lining_breaks_the_thin_ring_model():
         scenario.validate()
 
 
+def test_2_a_record_too_short_for_the_deep_response_is_refused(cheap_scenario):
+    """Soft undamped soil at 400 km/h: the default padding wrapped the deep response, which
+    then grew with depth (0.28 → 0.32 mm from 28 to 35 m, the true values being 0.75 → 0.61).
+    Refused, naming the padding; with the padding asked for, the peak decreases with depth."""
+    scenario = cheap_scenario()
+    scenario.update(
+        {
+            "soil": {"youngs_modulus": 1e6, "poisson_ratio": 0.49, "density": 1000.0},
+            "train": {"speed_kmh": 400.0},
+        }
+    )
+    scenario.soil.shear_loss_factor = 0.0
+    with pytest.raises(ScenarioError, match=r"numerics\.zero_pad_factor = 8 .*at least (\d+)"):
+        run(scenario)
+    scenario.numerics.zero_pad_factor = 32
+    peak = run(scenario).soil.peak_disp_m
+    assert np.all(np.diff(peak) < 0.0)
+
+
 def _soil_response(peaks):
     """SoilResponse with the given peak profile (other arrays irrelevant to the check)."""
     empty = np.zeros(0)
