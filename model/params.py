@@ -256,7 +256,8 @@ class Train(param.Parameterized):
         False,
         label="Single bogie only",
         doc="If true, simulate the paper's Fig. 1 model: half a car body on one bogie with two "
-        "wheelsets, instead of the full train.",
+        "wheelsets, instead of the full train (Train.axle_offsets, "
+        "model.vehicle_track._vehicle_system).",
     )
 
     @classmethod
@@ -369,7 +370,8 @@ class Track(param.Parameterized):
         (0.0, 3e5),
         "Block pad damping (N·s/m)",
         "Block pad + rubber boot damping per block, C_s (assumed), in "
-        "model.vehicle_track._track_system and the invert force. Bounds 0–1 MN·s/m.",
+        "model.vehicle_track._track_system and the invert force. Bounds 0–1 MN·s/m: undamped to "
+        "five times the most damped published boots.",
     )
     block_mass = _q(
         100.0,
@@ -394,8 +396,9 @@ class Track(param.Parameterized):
         default="conical",
         objects=list(HERTZ_FITS),
         label="Wheel tread",
-        doc="Tread profile for the Hertz constant: conical G = 4.57 R^-0.149e-8, "
-        "worn G = 3.86 R^-0.115e-8 (paper §2.3, MODEL.md §3).",
+        doc="Tread profile for the Hertz constant G of Track.hertz_constant (the contact law of "
+        "the model.vehicle_track kernel): conical G = 4.57 R^-0.149e-8, worn "
+        "G = 3.86 R^-0.115e-8 (paper §2.3, docs/model.md §3).",
     )
 
     @property
@@ -557,7 +560,8 @@ class Tunnel(param.Parameterized):
         label="Tunnel–soil model",
         doc="'2d': the paper's plane-strain section (ring in soil), the load of one block spread "
         "over one block spacing on the whole tunnel at once; '2.5d': the lining as a cylindrical "
-        "shell infinite along the tunnel, loaded by the moving train (kernel at ξ = ω/v).",
+        "shell infinite along the tunnel, loaded by the moving train (kernel at ξ = ω/v). "
+        "Dispatched by the soil stage of model.pipeline.run.",
     )
 
     @property
@@ -729,7 +733,8 @@ class Numerics(param.Parameterized):
         softbounds=(4, 128),
         label="Ring harmonics",
         doc="Circumferential harmonics n = 0..N_n summed in model.tunnel_soil.invert_receptance "
-        "(called from model.settlement.soil_response). Bounds 1–1024.",
+        "(called from model.settlement.soil_response). Bounds 1–1024: the ring's bending makes "
+        "the terms fall as n⁻⁴ (32 converge to 1e-3, tests); more only cost time.",
     )
     soil_max_frequency = _q(
         100.0,
@@ -748,7 +753,8 @@ class Numerics(param.Parameterized):
         label="Zero-padding factor",
         doc="Record length used for the soil FFT, as a multiple of the passage duration, in "
         "model.settlement.soil_response (convergence of the peak is shown in tests). Bounds "
-        "1–256.",
+        "1–256; a run also refuses a padded record shorter than the passage plus the wave tail "
+        "to max_depth (model.pipeline.check_record_padding), which would wrap the deep response.",
     )
     psd_segment = _q(
         4.0,
@@ -757,7 +763,7 @@ class Numerics(param.Parameterized):
         "PSD segment length (s)",
         "Welch segment length T_seg for the one-sided PSDs (frequency resolution 1/T_seg), in "
         "model.spectra.one_sided_psd (load and soil stages); a shorter record is analysed "
-        "whole. Bounds 0.1–100 s.",
+        "whole. Bounds 0.1–100 s: resolutions from 10 Hz to 0.01 Hz.",
     )
     max_depth = _q(
         35.0,
@@ -765,9 +771,9 @@ class Numerics(param.Parameterized):
         (11.0, 60.0),
         "Deepest output depth (m)",
         "Depth below the invert down to which model.settlement.soil_response reports the "
-        "displacement (paper Fig. 11 and conclusions: 35 m); at least 11 m, the paper's "
-        "comparison depth, which the summary always reports. At most 200 m: a full-space "
-        "model of the ground says nothing deeper.",
+        "displacement (paper Fig. 11 and conclusions: 35 m). Bounds 11–200 m: 11 m is the "
+        "paper's comparison depth, which the summary always reports; a full-space model of the "
+        "ground says nothing deeper than 200 m.",
     )
     n_depths = Count(
         71,
@@ -775,7 +781,8 @@ class Numerics(param.Parameterized):
         softbounds=(11, 201),
         label="Output depths",
         doc="Number of equally spaced depths from the invert to the deepest one, in "
-        "model.settlement.soil_response. Bounds 2–2000.",
+        "model.settlement.soil_response. Bounds 2–2000: a profile needs two points; memory grows "
+        "as depths × padded samples (run-cost guard).",
     )
 
 
@@ -792,7 +799,8 @@ class LongTerm(param.Parameterized):
     """Permanent settlement accumulated over years of traffic (MODEL.md §10).
 
     Static stress state of the ground around the tunnel, traffic, and the empirical cyclic
-    strain-accumulation law ε_p(q_d, N) (ε_p in %, stresses in the law as ratios).
+    strain-accumulation law ε_p(q_d, N) (ε_p in %, stresses in the law as ratios). Every
+    parameter is read by ``model.longterm`` (the pipeline's "longterm" stage).
     """
 
     law = param.Selector(
@@ -801,22 +809,23 @@ class LongTerm(param.Parameterized):
         label="Strain law",
         doc="Cyclic strain-accumulation law: Li & Selig (1996) ε_p = a (q_d/σ_s)^m N^b; "
         "Chai & Miura (2002) ε_p = a (q_d/q_f)^m (1 + q_s/q_f)^n N^b; Monismith (1975) "
-        "ε_p = A N^b.",
+        "ε_p = A N^b; evaluated in model.longterm.",
     )
     soil_class = param.Selector(
         default="CH",
         objects=[*LI_SELIG_SOIL_CLASSES, "user"],
         label="Soil class",
         doc="Li & Selig parameter set (a, b, m) for ML, MH, CL, CH soils; 'user' takes the values "
-        "of a, b and m below (e.g. from a cyclic-triaxial calibration).",
+        "of a, b and m below (e.g. from a cyclic-triaxial calibration); via "
+        "LongTerm.law_parameters.",
     )
     a = _q(
         1.2,
         (0, 100),
         (0.1, 5.0),
         "Law coefficient a (%)",
-        "Coefficient a (or A of Monismith) of the strain law, ε_p in %; used when the soil class "
-        "is 'user' or the law is not Li & Selig.",
+        "Coefficient a (or A of Monismith) of the strain law, ε_p in %; used (via "
+        "LongTerm.law_parameters) when the soil class is 'user' or the law is not Li & Selig.",
         (False, True),
     )
     b = _q(
@@ -824,8 +833,8 @@ class LongTerm(param.Parameterized):
         (0, 1),
         (0.05, 0.4),
         "Cycle exponent b (-)",
-        "Exponent b of N in the strain law; used when the soil class is 'user' or the law is not "
-        "Li & Selig.",
+        "Exponent b of N in the strain law; used (via LongTerm.law_parameters) when the soil "
+        "class is 'user' or the law is not Li & Selig.",
         (False, False),
     )
     m = _q(
@@ -833,8 +842,8 @@ class LongTerm(param.Parameterized):
         (0, 10),
         (1.0, 4.0),
         "Stress exponent m (-)",
-        "Exponent m of the stress ratio in the strain law; used when the soil class is 'user' or "
-        "the law is not Li & Selig.",
+        "Exponent m of the stress ratio in the strain law; used (via LongTerm.law_parameters) "
+        "when the soil class is 'user' or the law is not Li & Selig.",
         (False, True),
     )
     n = _q(
@@ -842,14 +851,15 @@ class LongTerm(param.Parameterized):
         (0, 10),
         (0.0, 3.0),
         "Static-stress exponent n (-)",
-        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law (default 1.0).",
+        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law in model.longterm (default 1.0).",
     )
     trains_per_day = _q(
         200.0,
         (0, 5000),
         (10.0, 600.0),
         "Trains per day (-)",
-        "Passages of the train over the section per day, both directions.",
+        "Passages of the train over the section per day, both directions, n_d; with the cycles "
+        "per train it gives N(t) in model.longterm.",
         (False, True),
     )
     years = _q(
@@ -857,24 +867,24 @@ class LongTerm(param.Parameterized):
         (0, 200),
         (1.0, 100.0),
         "Years of service (yr)",
-        "Service time at which the final settlement is reported; the settlement-time curve runs "
-        "from one day of traffic to this time.",
+        "Service time t at which model.longterm reports the final settlement; the "
+        "settlement-time curve runs from one day of traffic to this time.",
         (False, True),
     )
     cycles_per_train = param.Selector(
         default="bogies",
         objects=["bogies", "rainflow"],
         label="Cycles per train",
-        doc="Load cycles per passage: one per bogie, or counted on the deviator history by "
-        "rainflow (ASTM E1049), full cycles weighted by their range.",
+        doc="Load cycles per passage in model.longterm: one per bogie, or counted on the deviator "
+        "history by rainflow (ASTM E1049), full cycles weighted by their range.",
     )
     axis_depth = _q(
         15.0,
         (0, 200),
         (8.0, 40.0),
         "Tunnel axis depth (m)",
-        "Depth of the tunnel axis below the ground surface, H_t; the paper gives none, 15 m is "
-        "assumed.",
+        "Depth of the tunnel axis below the ground surface, H_t, for the static stress state in "
+        "model.longterm; the paper gives none, 15 m is assumed.",
         (False, True),
     )
     water_table_depth = _q(
@@ -882,15 +892,16 @@ class LongTerm(param.Parameterized):
         (0, 200),
         (0.0, 10.0),
         "Water table depth (m)",
-        "Depth of the water table below the ground surface (soil above it is taken as dry at "
-        "the same density).",
+        "Depth of the water table below the ground surface, z_w, for σ′_v0 in model.longterm "
+        "(soil above it is taken as dry at the same density).",
     )
     friction_angle = _q(
         25.0,
         (0, 60),
         (15.0, 40.0),
         "Effective friction angle φ′ (°)",
-        "Effective friction angle; sets K0 = 1 − sin φ′ (Jaky) for the static stress state.",
+        "Effective friction angle φ′; sets K0 = 1 − sin φ′ (Jaky, "
+        "LongTerm.earth_pressure_coefficient) for the static stress state in model.longterm.",
         (False, True),
     )
     cu_ratio = _q(
@@ -899,7 +910,7 @@ class LongTerm(param.Parameterized):
         (0.1, 0.5),
         "Undrained strength ratio c_u/σ′_v0 (-)",
         "Undrained shear strength as a ratio to the vertical effective stress (normally "
-        "consolidated clay); the static strength is σ_s = q_f = 2c_u.",
+        "consolidated clay); the static strength in model.longterm is σ_s = q_f = 2c_u.",
         (False, True),
     )
     undrained_strength = _q(
@@ -907,8 +918,8 @@ class LongTerm(param.Parameterized):
         (0, None),
         (10e3, 200e3),
         "Undrained shear strength c_u (Pa)",
-        "Undrained shear strength given directly (uniform with depth); None uses the ratio to "
-        "σ′_v0 above.",
+        "Undrained shear strength c_u given directly (uniform with depth) to model.longterm; "
+        "None uses the ratio to σ′_v0 above.",
         (False, True),
         allow_none=True,
     )

@@ -2,6 +2,7 @@
 
 import json
 import math
+import re
 
 import param
 import pytest
@@ -134,6 +135,16 @@ def test_every_parameter_has_label_doc_and_softbounds_inside_bounds(cls, name, p
     assert high is None or soft_high <= high
     default = p.default
     assert default is None or (soft_low <= default <= soft_high), "default outside slider range"
+
+
+def test_every_parameter_doc_names_where_it_is_used():
+    """Traceability (issue 9): each doc names the module or class member that reads it."""
+    where = re.compile(r"\bmodel\.\w+|\b(Train|Track|Scenario|Vehicle|LongTerm)\.\w+")
+    scenario = Scenario()
+    for section in SECTIONS:
+        for name, p in getattr(scenario, section).param.objects("existing").items():
+            if name != "name":
+                assert where.search(p.doc or ""), f"{section}.{name}"
 
 
 def test_constructor_arguments_are_checked_with_the_same_message():
