@@ -29,7 +29,6 @@ from dashboard import plots
 from dashboard.export import ITEMS_CSS, items_html, report_html
 from model.params import PRESETS_FILE, SECTIONS, Scenario, ScenarioError, Train
 from model.pipeline import (
-    DEFAULT_CACHE,
     STAGES,
     Results,
     SimulationError,
@@ -169,8 +168,9 @@ class Dashboard(pn.viewable.Viewer):
         Name shown in the preset selector.
     threaded : bool
         Compute off the event loop (served app) instead of in the calling thread (tests).
-    cache : StageCache
-        Stage cache shared by runs, so only the stages a change touches re-run.
+    cache : StageCache, optional
+        Stage cache shared by runs, so only the stages a change touches re-run (default: a
+        new one owned by this dashboard).
     """
 
     threaded = param.Boolean(default=False, doc="Run the pipeline in a worker thread.")
@@ -179,12 +179,12 @@ class Dashboard(pn.viewable.Viewer):
         self,
         scenario: Scenario | None = None,
         preset: str = DEFAULT_PRESET,
-        cache: StageCache = DEFAULT_CACHE,
+        cache: StageCache | None = None,
         **params,
     ):
         super().__init__(**params)
         self.scenario = scenario if scenario is not None else Scenario.preset(preset)
-        self.cache = cache
+        self.cache = cache if cache is not None else StageCache()
         self.results: Results | None = None
         self.render_counts = dict.fromkeys(STAGES, 0)
         self._shown_keys: dict[str, str] = {}

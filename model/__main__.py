@@ -16,13 +16,16 @@ import argparse
 import importlib
 import json
 import sys
+import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from model.params import Scenario
 from model.pipeline import STAGES, Results, SimulationError, run
+from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 
@@ -54,18 +57,19 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run the vehicle–track–tunnel–soil model and write its results.",
     )
     add_scenario_arguments(parser)
-    parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
+    parser.add_argument(
+        "--out", type=Path, required=True, help="output folder (created; must be new or empty)"
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="write into --out even if it holds files"
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return parser
 
 
 def load_scenario(args: argparse.Namespace) -> Scenario:
     """Scenario from the preset or file, with the ``--set`` overrides applied."""
-    scenario = (
-        Scenario.from_json(args.scenario.read_text(encoding="utf-8"))
-        if args.scenario
-        else Scenario.preset(args.preset)
-    )
+    scenario = Scenario.from_file(args.scenario) if args.scenario else Scenario.preset(args.preset)
     for item in args.overrides:
         path, sep, value = item.partition("=")
         if not sep:
@@ -96,6 +100,29 @@ class TerminalProgress:
         """End the bar's line."""
         if self.shown:
             self.stream.write("\n")
+
+
+def prepare_output_folder(out: Path, force: bool) -> None:
+    """Create ``out`` (and its parents) and check it can be written, before any computation.
+
+    Raises
+    ------
+    ValueError
+        If ``out`` is a file, holds files and ``force`` is false, or cannot be created or
+        written; the message names ``--out``.
+    """
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file, not a folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise ValueError(
+            f"--out {out} already holds files; choose a new folder or pass --force to overwrite"
+        )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as error:
+        raise ValueError(f"--out {out} cannot be written: {error.strerror or error}") from None
 
 
 def write_results(results: Results, out: Path) -> list[Path]:
@@ -161,9 +188,16 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         scenario = load_scenario(args)
+        scenario.validate()
+        estimate = estimate_run(scenario)
+        prepare_output_folder(args.out, args.force)
+        if estimate.total_seconds > SLOW_RUN_SECONDS and not args.quiet:
+            print(f"warning: {estimate.slow_message()}", file=sys.stderr)
         progress = None if args.quiet else TerminalProgress()
         try:
-            results = run(scenario, progress=progress, cache=None)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SlowRunWarning)  # told above
+                results = run(scenario, progress=progress, cache=None)
         finally:
             if progress is not None:
                 progress.close()

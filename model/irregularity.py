@@ -232,10 +232,10 @@ def synthesize_profile(
 def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
     """Measured vertical profile from a CSV file.
 
-    Format: lines starting with ``#`` and blank lines are ignored; the first other line is the
-    header ``x_m,eta_m`` or ``x_m,eta_mm`` (η in mm is converted to m); then one ``x,η`` pair per
-    line, at least two, x strictly increasing, all values finite. η follows the project's
-    convention: positive is a dip.
+    Format (UTF-8, with or without a byte-order mark): lines starting with ``#`` and blank lines
+    are ignored; the first other line is the header ``x_m,eta_m`` or ``x_m,eta_mm`` (η in mm is
+    converted to m); then one ``x,η`` pair per line, at least two, x strictly increasing, all
+    values finite. η follows the project's convention: positive is a dip.
 
     Parameters
     ----------
@@ -252,10 +252,19 @@ def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ValueError
-        If the file is malformed; the message names the file, the line number and the fault.
+        If the file cannot be read, is not UTF-8 or is malformed; the message names the file
+        (and the line number and the fault).
     """
     path = Path(path)
-    lines = path.read_text(encoding="utf-8").splitlines()
+    try:
+        lines = path.read_bytes().decode("utf-8-sig").splitlines()
+    except OSError as error:
+        raise ValueError(f"{path}: cannot read the profile file ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise ValueError(
+            f"{path}: not UTF-8 text (byte {error.start}: {error.reason}); save the profile "
+            "as UTF-8 or plain ASCII"
+        ) from None
     to_m = None
     x_values: list[float] = []
     eta_values: list[float] = []

@@ -11,23 +11,29 @@ the invert under the monitored block, spread over one block spacing and summed o
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import time
+import warnings
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from model.params import Scenario
+from model.params import Scenario, ScenarioError
+from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail, soil_response
 from model.spectra import one_sided_psd
 from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
 N_RAILS = 2  # both rails load the same tunnel section (MODEL.md §6)
+# invariant_warnings: growth of the peak with depth tolerated, relative to the invert peak (the
+# FFT's rounding and the tail's truncation leave ripples orders of magnitude below this).
+INVARIANT_TOLERANCE = 1e-6
 
 # Numerics parameters read by each stage; together they must cover every Numerics parameter
 # (checked by the tests), so that no setting is silently left out of a cache key.
@@ -107,7 +113,11 @@ class Results:
 
 
 class StageCache:
-    """Small LRU cache per stage, keyed on the JSON of the parameters the stage reads."""
+    """Small LRU cache per stage, keyed on the JSON of the parameters the stage reads.
+
+    Values are stored read-only (see :func:`run`), so a caller cannot change what a later run
+    is served. The caller owns the cache: :func:`run` uses one only when it is passed.
+    """
 
     def __init__(self, size: int = 4):
         self.size = size
@@ -138,9 +148,6 @@ class StageCache:
         self.__init__(self.size)
 
 
-DEFAULT_CACHE = StageCache()
-
-
 def stage_keys(scenario: Scenario) -> dict[str, str]:
     """Cache key of each stage: the JSON of everything it depends on, upstream included."""
     data = scenario.to_dict()
@@ -153,9 +160,11 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
         section: data[section] for section in ("vehicle", "train", "track", "irregularity")
     }
     profile_csv = scenario.irregularity.profile_csv
-    if profile_csv:  # an edited file must not be served from the cache
-        stat = Path(profile_csv).stat() if Path(profile_csv).is_file() else None
-        vehicle_track["profile_file"] = stat and [stat.st_mtime_ns, stat.st_size]
+    if profile_csv:  # an edited file must not be served from the cache, whatever its stat
+        path = Path(profile_csv)
+        vehicle_track["profile_file"] = (
+            hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
+        )
     vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
     load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
     soil = {
@@ -176,9 +185,12 @@ def invert_line_load(block_force_N: np.ndarray, block_spacing_m: float) -> np.nd
 
 
 def run(
-    scenario: Scenario, progress: Progress | None = None, cache: StageCache | None = DEFAULT_CACHE
+    scenario: Scenario, progress: Progress | None = None, cache: StageCache | None = None
 ) -> Results:
-    """Run every stage that the cache cannot serve.
+    """Run every stage (or every stage that ``cache`` cannot serve).
+
+    Every array in the returned results is read-only (``flags.writeable`` is False), also
+    those served from a cache: copy an array before changing it.
 
     Parameters
     ----------
@@ -188,7 +200,8 @@ def run(
         Told the stage name (``"vehicle_track"``, ``"load"``, ``"soil"``) and the fraction done
         of that stage, 0 to 1, so a user interface can show a progress bar.
     cache : StageCache or None
-        Stage cache; ``None`` computes everything afresh.
+        Stage cache owned by the caller (e.g. the dashboard); ``None`` (the default) computes
+        everything afresh.
 
     Returns
     -------
@@ -197,10 +210,21 @@ def run(
     Raises
     ------
     ValueError
-        Bad or inconsistent inputs (before any computation).
+        Bad or inconsistent inputs, or a run that would not fit in memory (before any
+        computation; the message names the parameter).
     SimulationError
         The explicit integration diverged (its message names the limit on ``numerics.dt``).
+
+    Warns
+    -----
+    SlowRunWarning
+        Before computing, if the run is estimated to take longer than ``SLOW_RUN_SECONDS``.
     """
+    scenario.validate()
+    check_record_padding(scenario)
+    estimate = estimate_run(scenario)
+    if estimate.total_seconds > SLOW_RUN_SECONDS:
+        warnings.warn(estimate.slow_message(), SlowRunWarning, stacklevel=2)
     check_inputs(scenario)
     report = progress or (lambda stage, fraction: None)
     keys = stage_keys(scenario)
@@ -216,7 +240,7 @@ def run(
             return value
         report(name, 0.0)
         start = time.perf_counter()
-        value = compute()
+        value = _read_only(compute())
         seconds[name] = time.perf_counter() - start
         report(name, 1.0)
         if cache is not None:
@@ -241,16 +265,49 @@ def run(
             scenario.numerics,
         ),
     )
-    warnings = list(vt.warnings) + scenario_warnings(scenario)
     return Results(
         scenario_json=scenario.to_json(),
         vehicle_track=vt,
         load=load,
         soil=soil,
-        warnings=warnings,
+        warnings=list(vt.warnings) + scenario_warnings(scenario) + invariant_warnings(soil),
         stage_seconds=seconds,
         cached_stages=tuple(cached),
     )
+
+
+def _read_only(stage_result):
+    """The stage result with every array field made read-only (returned for chaining)."""
+    for item in fields(stage_result):
+        value = getattr(stage_result, item.name)
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
+    return stage_result
+
+
+def invariant_warnings(soil: SoilResponse) -> list[str]:
+    """Flags for results that break the elastic model's invariants (MODEL.md §8).
+
+    Under a downward load the peak downward displacement is positive and does not grow with
+    depth; a violation beyond ``INVARIANT_TOLERANCE`` of the invert peak means the inputs are
+    outside what the model represents.
+    """
+    peak, depth = soil.peak_disp_m, soil.depth_m
+    problems = []
+    if not peak[0] > 0.0:
+        problems.append(f"the peak downward displacement at the invert is {peak[0]:.3g} m, not > 0")
+    rise = np.diff(peak) > INVARIANT_TOLERANCE * abs(peak[0])
+    if np.any(rise):
+        k = int(np.argmax(rise))
+        problems.append(
+            f"the peak downward displacement grows with depth from {depth[k]:g} m to "
+            f"{depth[k + 1]:g} m ({peak[k]:.4g} → {peak[k + 1]:.4g} m)"
+        )
+    return [
+        f"{problem}: the elastic model's assumptions are broken; check soil.youngs_modulus, "
+        "soil.shear_loss_factor and numerics.zero_pad_factor"
+        for problem in problems
+    ]
 
 
 def _load_stage(vt: VehicleTrackResult, scenario: Scenario) -> LoadResult:
@@ -263,6 +320,31 @@ def _load_stage(vt: VehicleTrackResult, scenario: Scenario) -> LoadResult:
 def _time_step(t_s: np.ndarray) -> float:
     """Uniform sampling interval of a time vector (s)."""
     return float(t_s[1] - t_s[0])
+
+
+def check_record_padding(scenario: Scenario) -> None:
+    """Refuse a padded record too short for the response at the deepest output depth.
+
+    The soil stage's inverse FFT is periodic: a padded record shorter than the passage plus
+    the wave-travel tail to ``numerics.max_depth`` (``model.settlement.response_tail``) wraps
+    the deep response onto itself, which lowers the deep peaks (e.g. by half at 35 m for a soft
+    soil at 400 km/h) and can make them grow with depth.
+
+    Raises
+    ------
+    ScenarioError
+        Naming numerics.zero_pad_factor and the smallest value that suffices.
+    """
+    numerics, record = scenario.numerics, scenario.passage_duration
+    needed = record + response_tail(numerics.max_depth, scenario.soil.s_wave_speed)
+    if numerics.zero_pad_factor * record < needed:
+        raise ScenarioError(
+            f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "
+            f"record to less than the passage plus the wave-travel tail to "
+            f"numerics.max_depth = {numerics.max_depth:g} m ({needed:.2f} s), which would "
+            f"wrap the deep response; allowed: at least {math.ceil(needed / record)} (or a "
+            "smaller max_depth)"
+        )
 
 
 def scenario_warnings(scenario: Scenario) -> list[str]:
@@ -283,14 +365,6 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
             "loaded, which cuts the load history and lowers the soil response"
         )
     record = scenario.passage_duration
-    needed = record + response_tail(numerics.max_depth, scenario.soil.s_wave_speed)
-    if numerics.zero_pad_factor * record < needed:
-        warnings.append(
-            f"numerics.zero_pad_factor = {numerics.zero_pad_factor} pads the {record:.2f} s "
-            f"record to less than the passage plus the wave-travel tail to "
-            f"{numerics.max_depth:g} m ({needed:.2f} s): the deep response is cut short; use "
-            f"at least {math.ceil(needed / record)}"
-        )
     segment = numerics.psd_segment
     if record < segment:
         warnings.append(

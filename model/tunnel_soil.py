@@ -51,6 +51,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from model.params import Soil, Tunnel
+
 EULER_GAMMA = 0.5772156649015329
 
 # |z| below which K₀, K₁ come from their power series (no cancellation there: the series terms
@@ -377,53 +379,68 @@ class SoilField:
     sigma_rtheta: np.ndarray
 
 
-# Physical ranges of the inputs the kernel uses: (low, high, low inclusive, high inclusive).
-_RING_RANGES = {
-    "inner_radius": (0.0, math.inf, False, False),
-    "thickness": (0.0, math.inf, False, False),
-    "youngs_modulus": (0.0, math.inf, False, False),
-    "poisson_ratio": (-1.0, 0.5, False, False),
-    "density": (0.0, math.inf, False, False),
-}
-_SOIL_RANGES = {
-    "youngs_modulus": (0.0, math.inf, False, False),
-    "poisson_ratio": (-1.0, 0.5, False, False),
-    "density": (0.0, math.inf, False, False),
-    "shear_loss_factor": (0.0, math.inf, True, False),
-    "bulk_loss_factor": (0.0, math.inf, True, False),
-}
+def _checked_values(obj, section_class: type, names: tuple[str, ...]) -> None:
+    """Refuse values of ``obj`` outside the bounds that ``model.params`` declares for them.
+
+    The parameter classes are the only table of bounds: a Tunnel or Soil object was checked on
+    assignment against its own declared parameters (a subclass may widen them on purpose, e.g.
+    for an idealised limit in a test); any other object is checked against the declarations of
+    ``section_class``, with the same message.
+    """
+    if isinstance(obj, section_class):
+        return
+    for name in names:
+        section_class.param[name]._validate(getattr(obj, name))
 
 
-def _check_ranges(obj, section: str, ranges: dict) -> None:
-    """Raise ValueError naming the first attribute of ``obj`` outside its physical range."""
-    for name, (low, high, low_incl, high_incl) in ranges.items():
-        value = float(getattr(obj, name))
-        above = value >= low if low_incl else value > low
-        below = value <= high if high_incl else value < high
-        if not (math.isfinite(value) and above and below):
-            interval = f"{'[' if low_incl else '('}{low:g}, {high:g}{']' if high_incl else ')'}"
-            raise ValueError(
-                f"{section}.{name} = {value!r} is outside the physical range {interval}"
-            )
+def _finite_constants(section: str, obj, names: tuple[str, ...], compute) -> tuple:
+    """Result of ``compute()``, refused (naming the inputs) if a constant is not finite."""
+    try:
+        constants = compute()
+    except ArithmeticError:
+        constants = (math.nan,)
+    if not all(cmath.isfinite(value) for value in constants):
+        values = ", ".join(f"{section}.{name} = {getattr(obj, name)!r}" for name in names)
+        raise ValueError(f"{values} give non-finite model constants; check these inputs")
+    return constants
+
+
+_RING_INPUTS = ("inner_radius", "thickness", "youngs_modulus", "poisson_ratio", "density")
+_SOIL_INPUTS = (
+    "youngs_modulus",
+    "poisson_ratio",
+    "density",
+    "shear_loss_factor",
+    "bulk_loss_factor",
+)
 
 
 def _ring_constants(tunnel) -> tuple[float, float, float, float]:
     """(a, m, K, D) of the lining ring, after checking its parameters."""
-    _check_ranges(tunnel, "tunnel", _RING_RANGES)
-    return (
-        tunnel.ring_radius,
-        tunnel.density * tunnel.thickness,
-        tunnel.extensional_stiffness,
-        tunnel.bending_stiffness,
+    _checked_values(tunnel, Tunnel, _RING_INPUTS)
+    return _finite_constants(
+        "tunnel",
+        tunnel,
+        _RING_INPUTS,
+        lambda: (
+            tunnel.ring_radius,
+            tunnel.density * tunnel.thickness,
+            tunnel.extensional_stiffness,
+            tunnel.bending_stiffness,
+        ),
     )
 
 
 def _soil_constants(soil) -> tuple[complex, complex, float]:
     """(μ*, λ*, ρ) of the hysteretically damped soil, after checking its parameters."""
-    _check_ranges(soil, "soil", _SOIL_RANGES)
-    shear = soil.shear_modulus * (1.0 + 1j * soil.shear_loss_factor)
-    bulk = soil.bulk_modulus * (1.0 + 1j * soil.bulk_loss_factor)
-    return shear, bulk - 2.0 * shear / 3.0, soil.density
+    _checked_values(soil, Soil, _SOIL_INPUTS)
+
+    def moduli():
+        shear = soil.shear_modulus * (1.0 + 1j * soil.shear_loss_factor)
+        bulk = soil.bulk_modulus * (1.0 + 1j * soil.bulk_loss_factor)
+        return shear, bulk - 2.0 * shear / 3.0, soil.density
+
+    return _finite_constants("soil", soil, _SOIL_INPUTS, moduli)
 
 
 def _as_1d(values, name: str, unit: str) -> np.ndarray:
@@ -516,10 +533,16 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
         with_stresses,
     )
     for field in fields:
-        if not np.all(np.isfinite(field)):
+        bad = ~np.isfinite(field)
+        if np.any(bad):
+            row = int(np.argwhere(bad)[0, 0])
+            inputs = ", ".join(
+                [f"tunnel.{name} = {getattr(tunnel, name):g}" for name in _RING_INPUTS]
+                + [f"soil.{name} = {getattr(soil, name):g}" for name in _SOIL_INPUTS]
+            )
             raise ValueError(
-                "the ring–soil solution is not finite; check the inputs "
-                "(extreme frequency or parameters)"
+                f"the ring–soil solution is not finite at f = {omega[row] / (2 * np.pi):.4g} Hz "
+                f"for {inputs}; the frequency comes from numerics.soil_max_frequency"
             )
     return fields
 

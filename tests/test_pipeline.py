@@ -132,15 +132,17 @@ def test_fast_train_on_soft_soil_and_short_records_give_warnings_not_errors():
     assert any("less than numerics.psd_segment = 4 s" in w for w in warnings)
 
 
-def test_numerics_that_cut_the_response_short_give_warnings():
-    """approach · β < 4 leaves the block loaded at the record's ends; a padded record shorter
-    than the passage plus 2 shear-wave transits to the deepest point wraps the deep response."""
+def test_numerics_that_cut_the_response_short_give_warnings_or_are_refused():
+    """approach · β < 4 leaves the block loaded at the record's ends (a warning); a padded
+    record shorter than the passage plus 2 shear-wave transits to the deepest point wraps the
+    deep response (refused, issue 10: no silently wrong number)."""
     scenario = Scenario.paper()
     scenario.numerics.approach_distance = 2.0
     scenario.numerics.zero_pad_factor = 1
     warnings = pipeline.scenario_warnings(scenario)
     assert any("approach_distance = 2 m is shorter than 4/β = 3.5 m" in w for w in warnings)
-    assert any("zero_pad_factor = 1 pads" in w and "use at least 2" in w for w in warnings)
+    with pytest.raises(ScenarioError, match=r"zero_pad_factor = 1 pads.*at least 2"):
+        pipeline.check_record_padding(scenario)
 
 
 def test_inconsistent_scenario_is_refused_before_any_computation(cheap_scenario):
@@ -196,7 +198,7 @@ def test_cli_writes_readable_files(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("train.speed_kmh=-5", "Train.speed_kmh = -5.0 is outside the allowed range (0, 400]"),
+        ("train.speed_kmh=-5", "Train.speed_kmh = -5.0 is outside the allowed range [1, 400]"),
         ("train.speed_kmh=fast", "train.speed_kmh = 'fast' is not a number"),
         ("train.speed=5", "unknown parameter 'speed' in section 'train'"),
         ("speed_kmh", "must be of the form section.parameter=value"),

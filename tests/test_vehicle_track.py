@@ -570,7 +570,7 @@ def test_rail_too_short_is_refused_where_it_enters():
     with pytest.raises(
         ValueError,
         match=r"rail_end_margin = 5.0 is outside the allowed range "
-        r"\[20, inf\)",
+        r"\[20, 500\]",
     ):
         scenario.numerics.rail_end_margin = 5.0
     span = scenario.train.axle_span + scenario.numerics.approach_distance
