@@ -35,6 +35,7 @@ The chain, per depth d below the ring–soil interface directly under the invert
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -593,7 +594,8 @@ def law_statement(longterm, parameters: dict[str, float], cycles_per_train) -> s
     values = ", ".join(f"{k} = {v:g}{' %' if k == 'a' else ''}" for k, v in parameters.items())
     cycles = np.asarray(cycles_per_train)
     if lt.cycles_per_train == "bogies":
-        count = f"{cycles[0]:g} cycles per train (one per bogie)"
+        plural = "" if cycles[0] == 1 else "s"
+        count = f"{cycles[0]:g} cycle{plural} per train (one per bogie)"
     else:
         count = (
             f"{cycles.min():.3g}–{cycles.max():.3g} cycles per train (rainflow count of the "
@@ -756,39 +758,55 @@ def load_triaxial_csv(path) -> TriaxialData:
         fitted (fewer than 4 points, non-positive values, a single stress level).
     """
     path = Path(path)
+    return parse_triaxial_csv(path.read_text(encoding="utf-8"), path.name)
+
+
+def parse_triaxial_csv(text: str, source: str = "triaxial data") -> TriaxialData:
+    """Cyclic triaxial results from CSV text (format and errors as :func:`load_triaxial_csv`).
+
+    Parameters
+    ----------
+    text : str
+        Contents of the CSV file.
+    source : str
+        Name used in error messages (e.g. the uploaded file's name).
+
+    Returns
+    -------
+    TriaxialData
+    """
     rows, problems = [], []
     header_allowed = True
-    with path.open(newline="", encoding="utf-8") as handle:
-        for line_number, fields in enumerate(csv.reader(handle), start=1):
-            if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith(COMMENT):
+    for line_number, fields in enumerate(csv.reader(io.StringIO(text)), start=1):
+        if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith(COMMENT):
+            continue
+        try:
+            values = [float(field) for field in fields]
+        except ValueError:
+            if header_allowed:
+                header_allowed = False
                 continue
-            try:
-                values = [float(field) for field in fields]
-            except ValueError:
-                if header_allowed:
-                    header_allowed = False
-                    continue
-                problems.append(f"line {line_number}: not numbers: {','.join(fields)!r}")
-                continue
-            header_allowed = False
-            if len(values) != len(TRIAXIAL_COLUMNS):
-                problems.append(
-                    f"line {line_number}: {len(values)} values, expected "
-                    f"{len(TRIAXIAL_COLUMNS)} ({', '.join(TRIAXIAL_COLUMNS)})"
-                )
-            elif not all(math.isfinite(v) and v > 0.0 for v in values):
-                bad = next(
-                    f"{name} = {v!r}"
-                    for name, v in zip(TRIAXIAL_COLUMNS, values, strict=True)
-                    if not (math.isfinite(v) and v > 0.0)
-                )
-                problems.append(f"line {line_number}: {bad} must be finite and > 0")
-            else:
-                rows.append(values)
+            problems.append(f"line {line_number}: not numbers: {','.join(fields)!r}")
+            continue
+        header_allowed = False
+        if len(values) != len(TRIAXIAL_COLUMNS):
+            problems.append(
+                f"line {line_number}: {len(values)} values, expected "
+                f"{len(TRIAXIAL_COLUMNS)} ({', '.join(TRIAXIAL_COLUMNS)})"
+            )
+        elif not all(math.isfinite(v) and v > 0.0 for v in values):
+            bad = next(
+                f"{name} = {v!r}"
+                for name, v in zip(TRIAXIAL_COLUMNS, values, strict=True)
+                if not (math.isfinite(v) and v > 0.0)
+            )
+            problems.append(f"line {line_number}: {bad} must be finite and > 0")
+        else:
+            rows.append(values)
     if problems:
         shown = "; ".join(problems[:5]) + ("; …" if len(problems) > 5 else "")
-        raise ValueError(f"{path.name}: {len(problems)} bad row(s): {shown}")
+        raise ValueError(f"{source}: {len(problems)} bad row(s): {shown}")
     data = np.array(rows, dtype=float).reshape(-1, len(TRIAXIAL_COLUMNS))
-    result = TriaxialData(*data.T, source=path.name)
-    _check_calibration_data(result.n_cycles, result.strain_percent, result.stress_ratio, path.name)
+    result = TriaxialData(*data.T, source=source)
+    _check_calibration_data(result.n_cycles, result.strain_percent, result.stress_ratio, source)
     return result
