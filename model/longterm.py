@@ -223,7 +223,7 @@ def stress_response(line_load_N_per_m, dt_s: float, depth_m, scenario) -> Stress
         line_load_N_per_m, dt_s, scenario.numerics, scenario.soil.s_wave_speed
     )
     f_hz = grid.f_hz
-    dc = stress_transfer(0.5 * f_hz[1] / math.e, depth, scenario)
+    dc = stress_transfer(np.array([0.5 * f_hz[1] / math.e]), depth, scenario)
     rest = stress_transfer(f_hz[1:], depth, scenario)
     histories = []
     for dc_part, transfer in zip(dc.components(), rest.components(), strict=True):
@@ -614,7 +614,9 @@ def _failure_warnings(depth_m, deviator, strength) -> list[str]:
         return []
     edges = np.flatnonzero(np.diff(np.concatenate([[0], failing.astype(int), [0]])))
     ranges = ", ".join(
-        f"{depth_m[start]:.3g}–{depth_m[stop - 1]:.3g} m"
+        f"{depth_m[start]:.3g} m"
+        if stop - start == 1
+        else f"{depth_m[start]:.3g}–{depth_m[stop - 1]:.3g} m"
         for start, stop in zip(edges[::2], edges[1::2], strict=True)
     )
     return [

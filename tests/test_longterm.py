@@ -322,7 +322,10 @@ def test_warning_names_the_depth_range_where_the_load_reaches_the_strength(resul
     scenario.longterm.undrained_strength = 30e3  # σ_s = 60 kPa everywhere
     result = long_term_settlement(_stress(deviator, depth), scenario)
     assert len(result.warnings) == 1
-    assert "0–1 m, 5–5 m" in result.warnings[0] and "not valid near failure" in result.warnings[0]
+    assert (
+        "depths 0–1 m, 5 m below" in result.warnings[0]
+        and "not valid near failure" in result.warnings[0]
+    )
     assert np.all(np.isfinite(result.settlement_m))  # results are still given
 
 
