@@ -78,16 +78,22 @@ class StressField:
     sigma_rx: np.ndarray
     sigma_thetax: np.ndarray
 
-    def components(self) -> tuple[np.ndarray, ...]:
-        """The six components in the order of the fields."""
-        return (
-            self.sigma_rr,
-            self.sigma_thetatheta,
-            self.sigma_xx,
-            self.sigma_rtheta,
-            self.sigma_rx,
-            self.sigma_thetax,
-        )
+
+STRESS_COMPONENTS = (
+    "sigma_rr",
+    "sigma_thetatheta",
+    "sigma_xx",
+    "sigma_rtheta",
+    "sigma_rx",
+    "sigma_thetax",
+)
+"""Field names of a stress field, in the argument order of :func:`deviator_stress`; read by name
+so that any container with these attributes (e.g. the 2.5D model's) can be used."""
+
+
+def stress_components(field) -> list[np.ndarray]:
+    """The six components of a stress field, in the order of ``STRESS_COMPONENTS``."""
+    return [getattr(field, name) for name in STRESS_COMPONENTS]
 
 
 def plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics: int) -> StressField:
@@ -226,7 +232,7 @@ def stress_response(line_load_N_per_m, dt_s: float, depth_m, scenario) -> Stress
     dc = stress_transfer(np.array([0.5 * f_hz[1] / math.e]), depth, scenario)
     rest = stress_transfer(f_hz[1:], depth, scenario)
     histories = []
-    for dc_part, transfer in zip(dc.components(), rest.components(), strict=True):
+    for dc_part, transfer in zip(stress_components(dc), stress_components(rest), strict=True):
         if not (np.any(dc_part) or np.any(transfer)):
             histories.append(np.zeros((depth.size, grid.n_out)))
             continue

@@ -8,6 +8,9 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from model import longterm
 from model.__main__ import main
@@ -24,6 +27,7 @@ from model.longterm import (
     plane_strain_stress_transfer,
     range_weighted_cycles,
     static_state,
+    stress_components,
     stress_response,
     trapezoid_thickness,
 )
@@ -78,6 +82,20 @@ def test_deviator_of_pure_shear_and_rotation_invariance():
         )
 
 
+@settings(max_examples=200, database=None, deadline=None)
+@given(arrays(np.float64, 6, elements=st.floats(-1e6, 1e6)))
+def test_deviator_equals_the_principal_stress_form(components):
+    """Any symmetric tensor: √(3J₂) = √(½[(σ₁−σ₂)² + (σ₂−σ₃)² + (σ₃−σ₁)²]) with σᵢ its
+    eigenvalues (numpy.linalg.eigvalsh), an independent route; tolerance 1e-9 of the largest
+    stress (eigenvalue rounding)."""
+    rr, tt, xx, rt, rx, tx = components
+    tensor = np.array([[rr, rt, rx], [rt, tt, tx], [rx, tx, xx]])
+    s1, s2, s3 = np.linalg.eigvalsh(tensor)
+    expected = math.sqrt(0.5 * ((s1 - s2) ** 2 + (s2 - s3) ** 2 + (s3 - s1) ** 2))
+    scale = max(1.0, float(np.abs(components).max()))
+    assert abs(deviator_stress(rr, tt, xx, rt, rx, tx) - expected) <= 1e-9 * scale
+
+
 # ---- stress transfer and the static cavity -----------------------------------------------------
 def _cavity_scenario() -> Scenario:
     """Paper lining and soil without damping (the static closed form is real)."""
@@ -122,7 +140,7 @@ def test_stress_transfer_at_low_frequency_is_the_static_cavity_closed_form():
     np.testing.assert_allclose(field.sigma_xx / scale, 0.0, atol=1e-5)
     for zero in (field.sigma_rtheta, field.sigma_rx, field.sigma_thetax):
         np.testing.assert_array_equal(zero, 0.0)
-    history = deviator_stress(*(c.real for c in field.components()))
+    history = deviator_stress(*(c.real for c in stress_components(field)))
     np.testing.assert_allclose(history[0], q_closed, rtol=1e-5)
 
 
