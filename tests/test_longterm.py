@@ -315,6 +315,20 @@ def test_trapezoid_cells_and_the_90_percent_depth():
     assert d90 == pytest.approx(10.0 * (1.0 - math.sqrt(0.1)), rel=1e-5)
 
 
+def test_settlement_sum_converges_at_second_order_in_the_depth_step():
+    """ε_p = e^(−z/5) % over 0–35 m: S = 0.05 (1 − e^(−7)) m exactly; the trapezoidal cell
+    sum converges as h² (fitted order 2 ± 0.05)."""
+    exact = 0.05 * (1.0 - math.exp(-7.0))
+    steps, errors = [], []
+    for n_depths in (11, 21, 41, 81):
+        depth = np.linspace(0.0, 35.0, n_depths)
+        settlement = layered_settlement_m(np.exp(-depth / 5.0), trapezoid_thickness(depth))
+        steps.append(depth[1])
+        errors.append(abs(settlement - exact))
+    order = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert order == pytest.approx(2.0, abs=0.05)
+
+
 def test_rainflow_counts_pulses_and_weights_ripples_by_range():
     """k equal pulses from zero count k; a ripple of range r on top adds r/peak (rel 1e-12)."""
     pulses = np.tile([0.0, 1.0, 1.0, 0.5, 0.0], 3)
