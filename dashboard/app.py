@@ -62,7 +62,13 @@ TRAIN_GEOMETRY = ("car_length", "bogie_distance", "wheelbase")
 CUSTOM = "Custom"
 DEFAULT_PRESET = "paper"  # Scenario.paper(): the paper's Nanjing case
 
-STAGE_NAMES = {"vehicle_track": "vehicle–track", "load": "load", "soil": "soil"}
+STAGE_NAMES = {
+    "vehicle_track": "vehicle–track",
+    "load": "load",
+    "soil": "soil",
+    "stress": "stresses",
+    "longterm": "long-term settlement",
+}
 POLL_S = 0.1  # how often the page's progress bar is refreshed while a run computes
 
 # One worker: runs from all sessions queue instead of fighting over two cores.

@@ -126,9 +126,10 @@ def prepare_output_folder(out: Path, force: bool) -> None:
 
 
 def write_results(results: Results, out: Path) -> list[Path]:
-    """Write time histories, spectra and the depth profile (CSV), scenario and summary (JSON)."""
+    """Write time histories, spectra, the depth profile, the long-term settlement against time and
+    per depth (CSV), scenario and summary (JSON)."""
     out.mkdir(parents=True, exist_ok=True)
-    vt, load, soil = results.vehicle_track, results.load, results.soil
+    vt, load, soil, lt = results.vehicle_track, results.load, results.soil, results.longterm
     tables = {
         "time_histories.csv": {
             "t_s": vt.t_s,
@@ -149,6 +150,18 @@ def write_results(results: Results, out: Path) -> list[Path]:
             "t_s": soil.t_s,
             **{f"disp_{d:g}m_m": row for d, row in zip(soil.depth_m, soil.disp_m, strict=True)},
         },
+        "longterm_settlement.csv": {"years": lt.years, "settlement_m": lt.settlement_m},
+        "longterm_depth.csv": {
+            "depth_m": lt.depth_m,
+            "deviator_Pa": lt.deviator_Pa,
+            "strength_Pa": lt.strength_Pa,
+            "stress_ratio": lt.stress_ratio,
+            "static_deviator_Pa": lt.static_deviator_Pa,
+            "vertical_effective_stress_Pa": lt.vertical_effective_stress_Pa,
+            "cycles_per_train": lt.cycles_per_train,
+            "n_cycles": lt.n_cycles,
+            "strain_percent": lt.strain_percent,
+        },
     }
     written = []
     for name, columns in tables.items():
@@ -167,6 +180,7 @@ def write_results(results: Results, out: Path) -> list[Path]:
     summary_path = out / "summary.json"
     summary = {
         "summary": results.summary(),
+        "longterm_law": lt.statement,
         "warnings": results.warnings,
         "stage_seconds": results.stage_seconds,
     }
@@ -212,7 +226,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"peak invert force {summary['peak_invert_force_N'] / 1e3:.1f} kN, "
             f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
-            f"at 11 m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
+            f"at 11 m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; long-term settlement after "
+            f"{scenario.longterm.years:g} years {summary['longterm_settlement_m'] * 1e3:.2f} mm; "
             f"{len(paths)} files in {args.out}"
         )
     return 0

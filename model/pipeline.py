@@ -1,4 +1,5 @@
-"""The one place the stages are chained: vehicle–track → invert load → soil response.
+"""The one place the stages are chained: vehicle–track → invert load → soil response →
+stresses under the invert → long-term settlement.
 
 ``run(scenario)`` returns :class:`Results`. Each stage is cached on exactly the parameters it
 depends on, so moving a soil slider reuses the vehicle–track simulation and moving the speed
@@ -24,6 +25,13 @@ from typing import Any
 
 import numpy as np
 
+from model.longterm import (
+    LongTermResult,
+    StressResponse,
+    check_longterm_inputs,
+    long_term_settlement,
+    stress_response,
+)
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail, soil_response
@@ -48,7 +56,7 @@ SOIL_NUMERICS = (
     "n_depths",
 )
 
-STAGES = ("vehicle_track", "load", "soil")
+STAGES = ("vehicle_track", "load", "soil", "stress", "longterm")
 
 
 class SimulationError(RuntimeError):
@@ -80,6 +88,8 @@ class Results:
     vehicle_track: VehicleTrackResult
     load: LoadResult
     soil: SoilResponse
+    stress: StressResponse
+    longterm: LongTermResult
     warnings: list[str] = field(default_factory=list)
     stage_seconds: dict[str, float] = field(default_factory=dict)
     """Wall time of each stage in this run; 0.0 for a stage served from the cache."""
@@ -109,6 +119,10 @@ class Results:
             "soil_s_wave_speed_m_s": scenario.soil.s_wave_speed,
             "soil_lame_lambda_Pa": scenario.soil.lame_lambda,
             "soil_shear_modulus_Pa": scenario.soil.shear_modulus,
+            "deviator_invert_Pa": float(self.longterm.deviator_Pa[0]),
+            "strength_invert_Pa": float(self.longterm.strength_Pa[0]),
+            "longterm_settlement_m": float(self.longterm.settlement_m[-1]),
+            "longterm_depth90_m": self.longterm.depth90_m,
         }
 
 
@@ -173,9 +187,11 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
         "soil": data["soil"],
         "numerics": pick(SOIL_NUMERICS),
     }
+    stress = {"upstream": soil}
+    longterm = {"upstream": stress, "longterm": data["longterm"]}
     return {
         name: json.dumps(value, sort_keys=True)
-        for name, value in zip(STAGES, (vehicle_track, load, soil), strict=True)
+        for name, value in zip(STAGES, (vehicle_track, load, soil, stress, longterm), strict=True)
     }
 
 
@@ -197,7 +213,7 @@ def run(
     scenario : Scenario
         All inputs; validated before any computation.
     progress : callable(stage, fraction), optional
-        Told the stage name (``"vehicle_track"``, ``"load"``, ``"soil"``) and the fraction done
+        Told the stage name (one of ``STAGES``) and the fraction done
         of that stage, 0 to 1, so a user interface can show a progress bar.
     cache : StageCache or None
         Stage cache owned by the caller (e.g. the dashboard); ``None`` (the default) computes
@@ -226,6 +242,7 @@ def run(
     if estimate.total_seconds > SLOW_RUN_SECONDS:
         warnings.warn(estimate.slow_message(), SlowRunWarning, stacklevel=2)
     check_inputs(scenario)
+    check_longterm_inputs(scenario)
     report = progress or (lambda stage, fraction: None)
     keys = stage_keys(scenario)
     seconds: dict[str, float] = {}
@@ -265,12 +282,27 @@ def run(
             scenario.numerics,
         ),
     )
+    stress = stage(
+        "stress",
+        lambda: stress_response(
+            load.line_load_N_per_m, _time_step(load.t_s), soil.depth_m, scenario
+        ),
+    )
+    longterm = stage("longterm", lambda: long_term_settlement(stress, scenario))
+    run_warnings = (
+        list(vt.warnings)
+        + scenario_warnings(scenario)
+        + invariant_warnings(soil)
+        + list(longterm.warnings)
+    )
     return Results(
         scenario_json=scenario.to_json(),
         vehicle_track=vt,
         load=load,
         soil=soil,
-        warnings=list(vt.warnings) + scenario_warnings(scenario) + invariant_warnings(soil),
+        stress=stress,
+        longterm=longterm,
+        warnings=run_warnings,
         stage_seconds=seconds,
         cached_stages=tuple(cached),
     )

@@ -137,6 +137,76 @@ def dc_band_receptance(
     return invert_receptance(band_halfwidth_hz / math.e, depth_m, tunnel, soil, n_harmonics)[0].real
 
 
+@dataclass(frozen=True)
+class RecordGrid:
+    """Band-limited spectrum of a zero-padded load record and its output time grid."""
+
+    f_hz: np.ndarray
+    """(nk,) kept frequencies 0 … soil_max_frequency, step 1/T_pad (Hz)."""
+    load_spectrum: np.ndarray
+    """(nk,) Fourier transform of the load at ``f_hz`` (load unit · s)."""
+    n_out_pad: int
+    """Samples of the padded record on the output grid."""
+    dt_out: float
+    """Output time step (s), a whole multiple of the load's."""
+    n_out: int
+    """Output samples kept: the load record plus the wave-travel tail."""
+    record_s: float
+    """Duration of the load record (s)."""
+
+    def time_histories(self, spectra: np.ndarray) -> np.ndarray:
+        """(n_rows, n_out) histories x(t) = ∫ X(f) e^{i2πft} df of (n_rows, nk) spectra."""
+        padded = np.zeros((spectra.shape[0], self.n_out_pad // 2 + 1), dtype=complex)
+        padded[:, : self.f_hz.size] = spectra
+        # Δf · n_out_pad = 1/dt_out turns the inverse DFT into samples of the integral.
+        return scipy.fft.irfft(padded, self.n_out_pad, axis=1)[:, : self.n_out] / self.dt_out
+
+
+def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float) -> RecordGrid:
+    """Zero-pad, transform and band-limit a load record (module docstring: record handling).
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Load record q(t) (N/m), sampled from t = 0 at ``dt_s``.
+    dt_s : float
+        Sampling interval (s), > 0.
+    numerics : model.params.Numerics
+        Uses soil_max_frequency, zero_pad_factor, max_depth.
+    s_wave_speed : float
+        Soil shear-wave speed c₂ (m/s), which sets the tail kept after the record.
+
+    Returns
+    -------
+    RecordGrid
+    """
+    load = checked_record(line_load_N_per_m, dt_s)
+    n_record = load.size
+    f_max = numerics.soil_max_frequency
+    step = decimation_factor(dt_s, f_max)
+    dt_out = step * dt_s
+    n_out_pad = scipy.fft.next_fast_len(
+        math.ceil(numerics.zero_pad_factor * n_record / step), real=True
+    )
+    f_hz, load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)
+    n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
+    if n_keep < 2:
+        raise ValueError(
+            f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
+            f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding"
+        )
+    record_s = n_record * dt_s
+    tail_s = response_tail(numerics.max_depth, s_wave_speed)
+    return RecordGrid(
+        f_hz=f_hz[:n_keep],
+        load_spectrum=load_spectrum[:n_keep],
+        n_out_pad=n_out_pad,
+        dt_out=dt_out,
+        n_out=min(n_out_pad, math.ceil((record_s + tail_s) / dt_out)),
+        record_s=record_s,
+    )
+
+
 def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> SoilResponse:
     """Displacement histories and peaks below the invert for a line-load history.
 
@@ -158,40 +228,22 @@ def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> Soi
     -------
     SoilResponse
     """
-    load = checked_record(line_load_N_per_m, dt_s)
-    n_record = load.size
-    record_s = n_record * dt_s
-    f_max = numerics.soil_max_frequency
-    step = decimation_factor(dt_s, f_max)
-    dt_out = step * dt_s
-    n_out_pad = scipy.fft.next_fast_len(
-        math.ceil(numerics.zero_pad_factor * n_record / step), real=True
-    )
-    n_pad = step * n_out_pad
-    f_hz, load_spectrum = fourier_transform(load, dt_s, n_pad)
-    n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
-    if n_keep < 2:
-        raise ValueError(
-            f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
-            f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding"
-        )
-    f_hz, load_spectrum = f_hz[:n_keep], load_spectrum[:n_keep]
+    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, soil.s_wave_speed)
+    f_hz, load_spectrum = grid.f_hz, grid.load_spectrum
+    n_keep = f_hz.size
 
     depth = np.linspace(0.0, numerics.max_depth, numerics.n_depths)
     receptance = np.empty((n_keep, depth.size), dtype=complex)
     receptance[0] = dc_band_receptance(0.5 * f_hz[1], depth, tunnel, soil, numerics.n_harmonics)
     receptance[1:] = invert_receptance(f_hz[1:], depth, tunnel, soil, numerics.n_harmonics)
 
-    disp_spectrum = np.zeros((depth.size, n_out_pad // 2 + 1), dtype=complex)
-    disp_spectrum[:, :n_keep] = (receptance * load_spectrum[:, None]).T
-    # Samples of u(t) = ∫ U(f) e^{i2πft} df on the output grid: Δf · n_out_pad = 1/dt_out.
-    tail_s = response_tail(numerics.max_depth, soil.s_wave_speed)
-    n_out = min(n_out_pad, math.ceil((record_s + tail_s) / dt_out))
-    disp = scipy.fft.irfft(disp_spectrum, n_out_pad, axis=1)[:, :n_out] / dt_out
+    disp_spectrum = (receptance * load_spectrum[:, None]).T
+    disp = grid.time_histories(disp_spectrum)
+    n_out, dt_out = grid.n_out, grid.dt_out
 
-    n_record_out = max(2, min(n_out, round(record_s / dt_out)))
+    n_record_out = max(2, min(n_out, round(grid.record_s / dt_out)))
     psd_f_hz, psd = one_sided_psd(disp[0, :n_record_out], dt_out, numerics.psd_segment)
-    in_band = psd_f_hz <= f_max
+    in_band = psd_f_hz <= numerics.soil_max_frequency
     return SoilResponse(
         f_hz=psd_f_hz[in_band],
         interface_psd=psd[in_band],
@@ -200,6 +252,6 @@ def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> Soi
         t_s=np.arange(n_out) * dt_out,
         disp_m=disp,
         interface_spectrum_f_hz=f_hz,
-        interface_amplitude_m_per_hz=np.abs(disp_spectrum[0, :n_keep]),
+        interface_amplitude_m_per_hz=np.abs(disp_spectrum[0]),
         line_load_amplitude_N_per_m_per_hz=np.abs(load_spectrum),
     )

@@ -24,7 +24,7 @@ from dashboard.app import HIDDEN, PRIMARY, Dashboard
 from dashboard.export import main as export_main
 from dashboard.export import report_html
 from model.params import SECTIONS, Scenario
-from model.pipeline import StageCache, run
+from model.pipeline import STAGES, StageCache, run
 
 MM = 1e3
 
@@ -210,7 +210,7 @@ def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
         x, y = _pane_data(dashboard, key)
         assert x.size > 10 and np.all(np.isfinite(y)), key
     assert 'data-key="peak_disp_invert"' in dashboard.summary.object
-    assert dashboard.render_counts == {"vehicle_track": 1, "load": 1, "soil": 1}
+    assert dashboard.render_counts == dict.fromkeys(STAGES, 1)
     assert dashboard.report_button.disabled is False
 
 
@@ -222,7 +222,7 @@ def test_speed_change_updates_every_plot(dashboard):
     for key in dashboard.plot_panes:
         after = np.concatenate(_pane_data(dashboard, key))
         assert after.shape != before[key].shape or not np.array_equal(after, before[key]), key
-    assert dashboard.render_counts == {"vehicle_track": 2, "load": 2, "soil": 2}
+    assert dashboard.render_counts == dict.fromkeys(STAGES, 2)
 
 
 def test_soil_change_redraws_only_the_soil_plots(dashboard):
@@ -237,7 +237,11 @@ def test_soil_change_redraws_only_the_soil_plots(dashboard):
         sent = dashboard.plot_streams[spec.key].data
         assert (sent is dashboard.results) == (spec.stage == "soil"), spec.key
         assert (sent is old) == (spec.stage != "soil"), spec.key
-    assert dashboard.render_counts == {"vehicle_track": 1, "load": 1, "soil": 2}
+    assert dashboard.render_counts == {
+        "vehicle_track": 1,
+        "load": 1,
+        **dict.fromkeys(STAGES[2:], 2),
+    }
     assert dashboard.summary.object != summary_before
     assert dashboard.soil_summary.object != soil_before
     # doubling E at fixed ν doubles μ (2 × 2.3077 MPa from E = 6 MPa, ν = 0.3)
@@ -254,7 +258,7 @@ def test_a_run_marks_only_the_plots_it_will_change_as_loading(dashboard):
         assert dashboard.plot_panes[spec.key].loading == (spec.stage == "soil"), spec.key
     dashboard._note_progress("soil", 0.5)
     dashboard._show_progress()
-    assert dashboard.progress.value == 83  # (2 stages done + 0.5) / 3
+    assert dashboard.progress.value == round(100 * 2.5 / len(STAGES))  # 2 stages done + 0.5
     assert "Computing soil… 50%" in dashboard.status.object
 
 

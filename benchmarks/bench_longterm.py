@@ -1,0 +1,73 @@
+"""Time the stress and long-term stages on the paper case (MODEL.md §10).
+
+Run: ``python benchmarks/bench_longterm.py``. Prints best-of-N wall times with warm Numba
+caches: the long-term stage alone (target ≤ 0.1 s), a pipeline re-run after a change of the
+long-term inputs only (every other stage served from the cache), and the stress stage, which
+re-runs with the soil stage.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from model.longterm import long_term_settlement, stress_response  # noqa: E402
+from model.params import Scenario  # noqa: E402
+from model.pipeline import StageCache, run  # noqa: E402
+
+REPEATS = 5
+
+
+def best_time(action) -> float:
+    """Best wall time (s) of ``action(i)`` over REPEATS calls."""
+    best = float("inf")
+    for i in range(REPEATS):
+        start = time.perf_counter()
+        action(i)
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def main() -> None:
+    scenario, cache = Scenario.paper(), StageCache()
+    results = run(scenario, cache=cache)  # warm caches, and the stages to reuse
+    load = results.load
+    dt = float(load.t_s[1] - load.t_s[0])
+    depth = results.soil.depth_m
+
+    def longterm_stage(i):
+        scenario.longterm.trains_per_day = 200.0 + i
+        long_term_settlement(results.stress, scenario)
+
+    def longterm_rainflow(i):
+        scenario.longterm.cycles_per_train = "rainflow"
+        longterm_stage(i)
+        scenario.longterm.cycles_per_train = "bogies"
+
+    def rerun(i):
+        scenario.longterm.years = 10.0 + i
+        assert run(scenario, cache=cache).cached_stages == (
+            "vehicle_track",
+            "load",
+            "soil",
+            "stress",
+        )
+
+    figures = {
+        "long-term stage alone (bogies)": best_time(longterm_stage),
+        "long-term stage alone (rainflow)": best_time(longterm_rainflow),
+        "pipeline re-run, long-term inputs changed": best_time(rerun),
+        "stress stage (runs with the soil stage)": best_time(
+            lambda i: stress_response(load.line_load_N_per_m, dt, depth, scenario)
+        ),
+    }
+    for label, seconds in figures.items():
+        print(f"paper  {label:45s} {seconds:7.4f} s")
+    print(f"paper  soil stage in the first run            {results.stage_seconds['soil']:7.4f} s")
+
+
+if __name__ == "__main__":
+    main()

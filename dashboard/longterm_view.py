@@ -1,0 +1,216 @@
+"""Long-term settlement view: pure plot functions Results → HoloViews, and a calibration panel.
+
+The plots read ``Results.longterm`` (MODEL.md §10): settlement at the invert against years of
+service (log axis), the permanent strain and the stress ratio q_d/σ_s against depth with the
+depth that holds 90 % of the settlement, and the fit of a cyclic-triaxial calibration. The
+:class:`CalibrationPanel` uploads a triaxial CSV (``model.longterm.parse_triaxial_csv``), shows
+the fit and writes the fitted a, b, m into a :class:`~model.params.LongTerm` (Li & Selig, soil
+class "user"). Units on screen: mm, %, kPa.
+"""
+
+from __future__ import annotations
+
+import holoviews as hv
+import numpy as np
+import panel as pn
+import param
+
+from dashboard.plots import _COMMON, MM, PlotSpec
+from model.longterm import TriaxialData, fit_strain_law, parse_triaxial_csv
+from model.params import LongTerm
+from model.pipeline import Results
+
+KPA = 1e-3  # Pa → kPa
+DEPTH = hv.Dimension("depth", label="Depth below the invert", unit="m")
+FIT_CURVE_POINTS = 50
+
+
+def _depth90_line(results: Results) -> hv.HLine:
+    """Horizontal line at the depth holding 90 % of the settlement (nothing drawn if NaN)."""
+    depth90 = results.longterm.depth90_m
+    return hv.HLine(depth90 if np.isfinite(depth90) else np.nan, label="90 % of S above").opts(
+        color="grey", line_dash="dotted"
+    )
+
+
+def settlement_time_plot(results: Results) -> hv.Curve:
+    """Settlement at the invert against years of service, log time axis."""
+    lt = results.longterm
+    curve = hv.Curve(
+        (lt.years, lt.settlement_m * MM),
+        kdims=[hv.Dimension("years", label="Service time", unit="years")],
+        vdims=[hv.Dimension("settlement", label="Settlement at the invert", unit="mm")],
+        label="Long-term settlement",
+    )
+    return curve.opts(title="Long-term settlement", logx=True, line_width=2, **_COMMON)
+
+
+def strain_depth_plot(results: Results) -> hv.Overlay:
+    """Permanent strain after the service time against depth, 90 % depth marked."""
+    lt = results.longterm
+    strain = hv.Dimension("strain", label="Permanent strain ε_p", unit="%")
+    curve = hv.Curve(
+        (lt.strain_percent, lt.depth_m), kdims=[strain], vdims=[DEPTH], label="ε_p"
+    ).opts(line_width=2)
+    return (curve * _depth90_line(results)).opts(
+        title=f"Permanent strain after {results.scenario.longterm.years:g} years",
+        invert_yaxis=True,
+        legend_position="bottom_right",
+        **_COMMON,
+    )
+
+
+def stress_ratio_depth_plot(results: Results) -> hv.Overlay:
+    """Dynamic deviator over static strength q_d/σ_s against depth, 90 % depth marked.
+
+    The laws hold below q_d/σ_s = 1 (a vertical line marks it when the ratio comes near it).
+    """
+    lt = results.longterm
+    ratio = hv.Dimension("stress_ratio", label="q_d/σ_s", unit="-")
+    deviator = hv.Dimension("deviator", label="q_d", unit="kPa")
+    strength = hv.Dimension("strength", label="σ_s", unit="kPa")
+    curve = hv.Curve(
+        (lt.stress_ratio, lt.depth_m, lt.deviator_Pa * KPA, lt.strength_Pa * KPA),
+        kdims=[ratio],
+        vdims=[DEPTH, deviator, strength],
+        label="q_d/σ_s",
+    ).opts(line_width=2)
+    layers = curve * _depth90_line(results)
+    if lt.stress_ratio.max() > 0.5:
+        layers = layers * hv.VLine(1.0, label="failure (laws not valid)").opts(color="red")
+    return layers.opts(
+        title="Dynamic deviator over static strength",
+        invert_yaxis=True,
+        legend_position="bottom_right",
+        **_COMMON,
+    )
+
+
+def law_statement(results: Results) -> str:
+    """Markdown naming the law, parameters and traffic, with the key numbers and warnings."""
+    lt = results.longterm
+    depth90 = f"{lt.depth90_m:.3g} m" if np.isfinite(lt.depth90_m) else "–"
+    lines = [
+        f"**Law:** {lt.statement}",
+        f"**Settlement at the invert after {results.scenario.longterm.years:g} years:** "
+        f"{lt.settlement_m[-1] * MM:.3g} mm; 90 % of it within {depth90} below the invert; "
+        f"q_d at the invert {lt.deviator_Pa[0] * KPA:.3g} kPa "
+        f"(σ_s = {lt.strength_Pa[0] * KPA:.3g} kPa).",
+    ]
+    lines += [f"⚠ {warning}" for warning in lt.warnings]
+    return "\n\n".join(lines)
+
+
+def calibration_plot(data: TriaxialData, fit: dict[str, float]) -> hv.Overlay:
+    """Triaxial points ε_p against N per stress level, with the fitted law, both log axes."""
+    cycles = hv.Dimension("n_cycles", label="Cycles N", unit="-")
+    strain = hv.Dimension("strain", label="Permanent strain ε_p", unit="%")
+    layers = []
+    n_fit = np.geomspace(data.n_cycles.min(), data.n_cycles.max(), FIT_CURVE_POINTS)
+    for ratio in np.unique(data.stress_ratio):
+        level = data.stress_ratio == ratio
+        label = f"q_d/σ_s = {ratio:.3g}"
+        layers.append(
+            hv.Scatter(
+                (data.n_cycles[level], data.strain_percent[level]),
+                kdims=[cycles],
+                vdims=[strain],
+                label=label,
+            ).opts(size=7)
+        )
+        fitted = fit["a"] * ratio ** fit["m"] * n_fit ** fit["b"]
+        layers.append(
+            hv.Curve((n_fit, fitted), kdims=[cycles], vdims=[strain], label=label).opts(
+                line_dash="dashed"
+            )
+        )
+    return hv.Overlay(layers).opts(
+        title=f"Calibration ({data.source}): ε_p = a (q_d/σ_s)^m N^b",
+        logx=True,
+        logy=True,
+        legend_position="top_left",
+        **_COMMON,
+    )
+
+
+def fit_summary(fit: dict[str, float]) -> str:
+    """Markdown of the fitted parameters with their standard errors."""
+    return (
+        f"a = {fit['a']:.4g} ± {fit['a_se']:.2g} %, b = {fit['b']:.4g} ± {fit['b_se']:.2g}, "
+        f"m = {fit['m']:.4g} ± {fit['m_se']:.2g} (± one standard error; {fit['n_points']} "
+        f"points, residual sd of ln ε_p {fit['residual_std']:.2g})"
+    )
+
+
+def apply_fit(longterm: LongTerm, fit: dict[str, float]) -> None:
+    """Use fitted a, b, m: Li & Selig's law with soil class 'user' (one update, one event)."""
+    longterm.param.update(law="li_selig", soil_class="user", a=fit["a"], b=fit["b"], m=fit["m"])
+
+
+LONGTERM_PLOTS = (
+    PlotSpec("longterm_settlement", "longterm", settlement_time_plot),
+    PlotSpec("longterm_strain", "longterm", strain_depth_plot),
+    PlotSpec("longterm_stress_ratio", "longterm", stress_ratio_depth_plot),
+)
+"""The long-term plots with the stage they read, in the form of ``dashboard.plots.PLOTS``."""
+
+
+class CalibrationPanel(pn.viewable.Viewer):
+    """Upload a cyclic-triaxial CSV, see the fit, and apply a, b, m to a LongTerm object."""
+
+    longterm = param.ClassSelector(class_=LongTerm, doc="Parameters that receive the fit.")
+    data = param.ClassSelector(class_=TriaxialData, allow_None=True, doc="Last good upload.")
+    fit = param.Dict(default=None, allow_None=True, doc="Fit of the last good upload.")
+
+    def __init__(self, **params):
+        params.setdefault("longterm", LongTerm())
+        super().__init__(**params)
+        self.file_input = pn.widgets.FileInput(accept=".csv,.txt")
+        self.apply_button = pn.widgets.Button(
+            label="Use fitted a, b, m (Li & Selig, user)", color="primary", disabled=True
+        )
+        self.message = pn.pane.Markdown(
+            "Columns: N, strain (%), q_d (kPa), σ_s (kPa); lines starting with # are comments."
+        )
+        self.plot = pn.pane.HoloViews(None, sizing_mode="stretch_width")
+        self.file_input.param.watch(self._on_upload, "value")
+        self.apply_button.on_click(lambda event: self.apply())
+
+    def load_text(self, text: str, source: str) -> None:
+        """Parse and fit CSV text; show the fit, or the reason it was refused."""
+        try:
+            data = parse_triaxial_csv(text, source)
+            fit = fit_strain_law(data.n_cycles, data.strain_percent, data.stress_ratio)
+        except ValueError as error:
+            self.param.update(data=None, fit=None)
+            self.message.object = f"**Refused:** {error}"
+            self.plot.object = None
+            self.apply_button.disabled = True
+            return
+        self.param.update(data=data, fit=fit)
+        self.message.object = f"**Fit of {source}:** {fit_summary(fit)}"
+        self.plot.object = calibration_plot(data, fit)
+        self.apply_button.disabled = False
+
+    def apply(self) -> None:
+        """Write the current fit into ``longterm``."""
+        if self.fit is not None:
+            apply_fit(self.longterm, self.fit)
+            self.message.object += (
+                f"\n\nApplied to the long-term settlement: {fit_summary(self.fit)}"
+            )
+
+    def _on_upload(self, event) -> None:
+        """FileInput callback: decode the bytes and load them."""
+        if event.new:
+            text = event.new.decode("utf-8", errors="replace")
+            self.load_text(text, self.file_input.filename or "upload.csv")
+
+    def __panel__(self):
+        return pn.Column(
+            "#### Calibration from a cyclic triaxial test",
+            self.file_input,
+            self.message,
+            self.apply_button,
+            self.plot,
+        )
