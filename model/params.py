@@ -677,7 +677,7 @@ class Numerics(param.Parameterized):
         doc="Number of equally spaced depths from the invert to the deepest one.",
     )
     n_wavenumbers = Count(
-        512,
+        384,
         bounds=(16, 100000),
         softbounds=(128, 4096),
         label="Wavenumber points",

@@ -57,11 +57,13 @@ like ln(1/ω) as ω → 0, as the 2D one does (``model.settlement`` averages the
 from __future__ import annotations
 
 import cmath
+import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
+from model.params import Numerics
 from model.tunnel_soil import (
     _as_1d,
     _bessel_ratios,
@@ -139,33 +141,13 @@ def _shear_row_stresses(n, r, xi, delta_p, delta_s, beta2, shear):
 
 
 @numba.njit(cache=True, nogil=True)
-def _solve3(m, rhs):
-    """Solve the complex 3×3 system m x = rhs by Gaussian elimination, partial pivoting."""
-    a = m.copy()
-    b = rhs.copy()
-    for col in range(3):
-        pivot = col
-        for row in range(col + 1, 3):
-            if abs(a[row, col]) > abs(a[pivot, col]):
-                pivot = row
-        if pivot != col:
-            for j in range(3):
-                a[col, j], a[pivot, j] = a[pivot, j], a[col, j]
-            b[col], b[pivot] = b[pivot], b[col]
-        inv = 1.0 / a[col, col]
-        for row in range(col + 1, 3):
-            factor = a[row, col] * inv
-            if factor != 0.0:
-                for j in range(col, 3):
-                    a[row, j] -= factor * a[col, j]
-                b[row] -= factor * b[col]
-    x = np.empty(3, np.complex128)
-    for row in range(2, -1, -1):
-        acc = b[row]
-        for j in range(row + 1, 3):
-            acc -= a[row, j] * x[j]
-        x[row] = acc / a[row, row]
-    return x
+def _solve_unit_radial(m00, m01, m02, m10, m11, m12, m20, m21, m22):
+    """x of the complex 3×3 system M x = (1, 0, 0) by cofactors (no array allocation)."""
+    c00 = m11 * m22 - m12 * m21
+    c01 = m12 * m20 - m10 * m22
+    c02 = m10 * m21 - m11 * m20
+    inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02)
+    return c00 * inv_det, c01 * inv_det, c02 * inv_det
 
 
 @numba.njit(cache=True, nogil=True)
@@ -203,16 +185,13 @@ def _interface_amplitudes(
         0j,
         xi * diff[5] + k2sq * unit_axial[5],
     )
-    m = np.zeros((3, 3), np.complex128)
-    rhs = np.zeros(3, np.complex128)
-    rhs[0] = 1.0
     if n == 0:  # radial and axial rows; columns X, Z (no SV)
-        m[0, 0] = s13 * grad_p[1] + s33 * grad_p[0] - grad_p[2]
-        m[0, 1] = s13 * z_col[1] + s33 * z_col[0] - z_col[2]
-        m[1, 0] = s11 * grad_p[1] + s13 * grad_p[0] - grad_p[5]
-        m[1, 1] = s11 * z_col[1] + s13 * z_col[0] - z_col[5]
-        det = m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
-        return m[1, 1] / det, 0j, -m[1, 0] / det
+        m00 = s13 * grad_p[1] + s33 * grad_p[0] - grad_p[2]
+        m01 = s13 * z_col[1] + s33 * z_col[0] - z_col[2]
+        m10 = s11 * grad_p[1] + s13 * grad_p[0] - grad_p[5]
+        m11 = s11 * z_col[1] + s13 * z_col[0] - z_col[5]
+        det = m00 * m11 - m01 * m10
+        return m11 / det, 0j, -m10 / det
     srt_p, srt_sum, srt_diff = _shear_row_stresses(n, a, xi, delta_p, delta_s, beta2, shear)
     srt_z = xi * srt_diff
     # Radial − tangential row, formed analytically (the K/a² terms cancel for n = 1 at ζ = 0).
@@ -238,17 +217,17 @@ def _interface_amplitudes(
     # Tangential displacement U_θ of each column at r = a: −n/a, δ_S, 0.
     v_p = -n / a + 0j
     v_sum = delta_s
-    m[0, 0] = d_u * grad_p[1] + d_v * v_p + d_w * grad_p[0] - diff_p
-    m[0, 1] = d_u * total[1] + d_v * v_sum + d_w * total[0] - diff_sum
-    m[0, 2] = d_u * z_col[1] + d_w * z_col[0] - diff_z
-    m[1, 0] = s12 * grad_p[1] + s22 * v_p + s23 * grad_p[0] - srt_p
-    m[1, 1] = s12 * total[1] + s22 * v_sum + s23 * total[0] - srt_sum
-    m[1, 2] = s12 * z_col[1] + s23 * z_col[0] - srt_z
-    m[2, 0] = s11 * grad_p[1] + s12 * v_p + s13 * grad_p[0] - grad_p[5]
-    m[2, 1] = s11 * total[1] + s12 * v_sum + s13 * total[0] - total[5]
-    m[2, 2] = s11 * z_col[1] + s13 * z_col[0] - z_col[5]
-    x = _solve3(m, rhs)
-    return x[0], x[1], x[2]
+    return _solve_unit_radial(
+        d_u * grad_p[1] + d_v * v_p + d_w * grad_p[0] - diff_p,
+        d_u * total[1] + d_v * v_sum + d_w * total[0] - diff_sum,
+        d_u * z_col[1] + d_w * z_col[0] - diff_z,
+        s12 * grad_p[1] + s22 * v_p + s23 * grad_p[0] - srt_p,
+        s12 * total[1] + s22 * v_sum + s23 * total[0] - srt_sum,
+        s12 * z_col[1] + s23 * z_col[0] - srt_z,
+        s11 * grad_p[1] + s12 * v_p + s13 * grad_p[0] - grad_p[5],
+        s11 * total[1] + s12 * v_sum + s13 * total[0] - total[5],
+        s11 * z_col[1] + s13 * z_col[0] - z_col[5],
+    )
 
 
 @numba.njit(cache=True, nogil=True)
@@ -335,11 +314,14 @@ def shell_soil_field_kernel(
                 c_sum = amp_y[n] * e_s
                 c_diff = q * amp_z[n] * e_s
                 c_axial = k2sq * amp_z[n] * e_s
-                grad_p, total, diff, unit_axial = _field_vectors(
-                    n, r, q, delta_p, delta_s, omega2_rho, k1sq, k2sq, beta2, shear, lame
+                # U_r of grad_P, of the sum and of the difference: −n/r − δ_P, −δ_P, δ_P − δ_S
+                u_r[i, j] += (
+                    c_p * (-n / r - delta_p) - c_sum * delta_p + c_diff * (delta_p - delta_s)
                 )
-                u_r[i, j] += c_p * grad_p[0] + c_sum * total[0] + c_diff * diff[0]
                 if with_stresses:
+                    grad_p, total, diff, unit_axial = _field_vectors(
+                        n, r, q, delta_p, delta_s, omega2_rho, k1sq, k2sq, beta2, shear, lame
+                    )
                     s_rr[i, j] += (
                         c_p * grad_p[2] + c_sum * total[2] + c_diff * diff[2]
                         + c_axial * unit_axial[2]
@@ -423,21 +405,28 @@ def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses):
     a, mass, extensional, bending = _ring_constants(tunnel)
     shear, lame, density = _soil_constants(soil)
     coefficients = invert_load_coefficients(a, _check_harmonics(n_harmonics))
-    fields = shell_soil_field_kernel(
-        omega,
-        xi,
-        np.ascontiguousarray(a + depth),
-        coefficients,
-        a,
-        mass,
-        extensional,
-        bending,
-        float(tunnel.poisson_ratio),
-        shear,
-        lame,
-        density,
-        with_stresses,
-    )
+    try:
+        fields = shell_soil_field_kernel(
+            omega,
+            xi,
+            np.ascontiguousarray(a + depth),
+            coefficients,
+            a,
+            mass,
+            extensional,
+            bending,
+            float(tunnel.poisson_ratio),
+            shear,
+            lame,
+            density,
+            with_stresses,
+        )
+    except ZeroDivisionError:
+        raise ValueError(
+            "a wavenumber equals the P- or S-wavenumber ω/c of an undamped soil (a branch "
+            "point, α or β = 0, where the potentials degenerate); move it slightly or give the "
+            "soil a loss factor"
+        ) from None
     for field in fields:
         if not np.all(np.isfinite(field)):
             raise ValueError(
@@ -520,3 +509,141 @@ def invert_stress_2p5d(
         sigma_rx=1j * s_rx,
         sigma_thetax=zero.copy(),
     )
+
+
+# ---- wavenumber integral: point load ------------------------------------------------------------
+# Points of each refinement at the P and S wavenumbers, per base-grid point; relative half-width
+# of the refined window around Re k, and the least relative width resolved there (undamped soil).
+_REFINE_FRACTION = 1 / 16
+_REFINE_HALF_WIDTH = 0.5
+_REFINE_MIN_WIDTH = 1e-3
+
+
+def _wavenumber_grid(omega, corner, reach, soil, numerics) -> np.ndarray:
+    """Nodes on [0, ξ_max] (rad/m): uniform in asinh(ξ/ξ_c); uniform on [0, 1.5 Re k₂], where
+    H oscillates in ξ with period ~2π/reach (waves to depth), with n_wavenumbers/(64π) nodes
+    per rad/m per metre of reach (12 per period of 2π/reach at the default 384); refined around
+    Re k₁ and Re k₂."""
+    xi_max = numerics.max_wavenumber
+    base = corner * np.sinh(np.linspace(0.0, math.asinh(xi_max / corner), numerics.n_wavenumbers))
+    shear, lame, density = _soil_constants(soil)
+    band = 1.5 * (omega * cmath.sqrt(density / shear)).real
+    n_band = math.ceil(band * reach * numerics.n_wavenumbers / (64.0 * math.pi))
+    parts = [base, np.linspace(0.0, band, n_band + 1)]
+    n_refine = max(8, int(_REFINE_FRACTION * numerics.n_wavenumbers))
+    for modulus in (lame + 2.0 * shear, shear):
+        k = omega * cmath.sqrt(density / modulus)
+        width = max(abs(k.imag) / abs(k.real), _REFINE_MIN_WIDTH)
+        offset = width * np.sinh(np.linspace(0.0, math.asinh(_REFINE_HALF_WIDTH / width), n_refine))
+        # Re k itself is left out: for an undamped soil it is the branch point α or β = 0.
+        parts.append(k.real * (1.0 + np.concatenate([-offset[:0:-1], offset[1:]])))
+    nodes = np.unique(np.concatenate(parts))
+    return nodes[(nodes >= 0.0) & (nodes <= xi_max)]
+
+
+def _filon_cosine_weights(nodes, x) -> np.ndarray:
+    """W (n_x, n_nodes): Σ_j W[:, j] h_j = ∫ h(ξ) cos(ξx) dξ for h linear between the nodes."""
+    half = 0.5 * np.diff(nodes)
+    middle = 0.5 * (nodes[1:] + nodes[:-1])
+    theta = np.outer(x, half)
+    sinc = np.sinc(theta / np.pi)
+    small = np.abs(theta) < 1e-3
+    safe = np.where(small, 1.0, theta)
+    # g(θ) = (sin θ − θ cos θ)/θ², from its series where the closed form would cancel.
+    g = np.where(
+        small, theta / 3.0 - theta**3 / 30.0, (np.sin(safe) - safe * np.cos(safe)) / safe**2
+    )
+    even = half * sinc * np.cos(np.outer(x, middle))
+    odd = half * g * np.sin(np.outer(x, middle))
+    weights = np.zeros((x.size, nodes.size))
+    weights[:, :-1] += even + odd
+    weights[:, 1:] += even - odd
+    return weights
+
+
+def point_load_response(
+    freq_hz, x_m, depth_m, tunnel, soil, n_harmonics: int, numerics: Numerics | None = None
+) -> np.ndarray:
+    """Displacement below the invert per unit downward point force on the invert (m/N).
+
+    G(ω, x, d) = (1/2π)∫ H(ω, ξ, d) e^{−iξx} dξ = (1/π)∫₀^∞ H(ω, ξ, d) cos ξx dξ (H is even),
+    MODEL.md §9: the force acts at the invert at x = 0, the displacement is taken at depth d
+    below the invert at distance x along the tunnel. The integral is Filon's rule (H linear
+    between nodes, the cosine integrated exactly, so x needs no extra nodes) on nodes uniform
+    in asinh(ξ/ξ_c) from 0 to ``numerics.max_wavenumber`` (ξ_c = min(0.1 Re k₂,
+    0.1/(a + d_max)), the scale of the smallest feature), uniform nodes over the band of
+    propagating waves ξ < 1.5 Re k₂ (where H oscillates with depth) and refinements around the
+    P and S wavenumbers Re k₁, Re k₂ where H has branch points. Its error is estimated as a third of
+    the change when every other node is dropped (Filon-linear converges as Δξ²); the tail
+    beyond ξ_max as |H(ξ_max)| ξ_max/(3π) (the shell's ξ⁻⁴ decay).
+
+    Parameters
+    ----------
+    freq_hz : float or array_like
+        Frequencies f (Hz), > 0.
+    x_m : float or array_like
+        Distances along the tunnel from the force (m).
+    depth_m : float or array_like
+        Depths d ≥ 0 below the ring–soil interface (m).
+    tunnel, soil : model.params.Tunnel, model.params.Soil
+        Lining and soil.
+    n_harmonics : int
+        Highest circumferential harmonic N ≥ 0.
+    numerics : model.params.Numerics, optional
+        Uses n_wavenumbers, max_wavenumber, wavenumber_tolerance (defaults if omitted).
+
+    Returns
+    -------
+    ndarray
+        Complex (n_freq, n_x, n_depth) displacement in m per N, exp(+iωt).
+
+    Raises
+    ------
+    ValueError
+        Bad input, or an integral whose estimated error (or tail) exceeds
+        ``numerics.wavenumber_tolerance`` times the largest |G| at that frequency and depth;
+        the message names the numerics parameter to raise.
+    """
+    numerics = Numerics() if numerics is None else numerics
+    omega, _ = _paired_inputs(freq_hz, 0.0)
+    x = _as_1d(x_m, "x_m", "m")
+    depth = _depths(depth_m)
+    shear, _, density = _soil_constants(soil)
+    reach = tunnel.ring_radius + float(depth.max())
+    grids = []
+    for w in omega:
+        k2 = w * math.sqrt(density / abs(shear))
+        corner = min(0.1 * k2, 0.1 / reach)
+        grids.append(_wavenumber_grid(w, corner, reach, soil, numerics))
+    sizes = [grid.size for grid in grids]
+    h_all = receptance_2p5d(
+        np.repeat(omega / (2.0 * np.pi), sizes), np.concatenate(grids), depth, tunnel, soil,
+        n_harmonics,
+    )  # fmt: skip
+    tolerance = numerics.wavenumber_tolerance
+    response = np.empty((omega.size, x.size, depth.size), dtype=complex)
+    start = 0
+    for i, nodes in enumerate(grids):
+        h = h_all[start : start + nodes.size]
+        start += nodes.size
+        response[i] = _filon_cosine_weights(nodes, x) @ h / np.pi
+        coarse = _filon_cosine_weights(nodes[::2], x) @ h[::2] / np.pi
+        if (nodes.size - 1) % 2:  # the coarse rule must reach ξ_max too
+            coarse += _filon_cosine_weights(nodes[-2:], x) @ h[-2:] / np.pi
+        scale = np.abs(response[i]).max(axis=0)
+        error = np.abs(response[i] - coarse).max(axis=0) / 3.0
+        tail = np.abs(h[-1]) * nodes[-1] / (3.0 * np.pi)
+        freq = omega[i] / (2.0 * np.pi)
+        if np.any(error > tolerance * scale):
+            raise ValueError(
+                f"the wavenumber integral has not converged at {freq:.4g} Hz (estimated "
+                f"relative error {np.max(error / scale):.2g} > numerics.wavenumber_tolerance = "
+                f"{tolerance:g}): raise numerics.n_wavenumbers (now {numerics.n_wavenumbers})"
+            )
+        if np.any(tail > tolerance * scale):
+            raise ValueError(
+                f"the wavenumber integral is cut too early at {freq:.4g} Hz (estimated tail "
+                f"{np.max(tail / scale):.2g} > numerics.wavenumber_tolerance = {tolerance:g}): "
+                f"raise numerics.max_wavenumber (now {numerics.max_wavenumber:g} rad/m)"
+            )
+    return response
