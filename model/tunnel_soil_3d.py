@@ -541,24 +541,35 @@ def _wavenumber_grid(omega, corner, reach, soil, numerics) -> np.ndarray:
     return nodes[(nodes >= 0.0) & (nodes <= xi_max)]
 
 
-def _filon_cosine_weights(nodes, x) -> np.ndarray:
-    """W (n_x, n_nodes): Σ_j W[:, j] h_j = ∫ h(ξ) cos(ξx) dξ for h linear between the nodes."""
-    half = 0.5 * np.diff(nodes)
-    middle = 0.5 * (nodes[1:] + nodes[:-1])
-    theta = np.outer(x, half)
-    sinc = np.sinc(theta / np.pi)
-    small = np.abs(theta) < 1e-3
-    safe = np.where(small, 1.0, theta)
-    # g(θ) = (sin θ − θ cos θ)/θ², from its series where the closed form would cancel.
-    g = np.where(
-        small, theta / 3.0 - theta**3 / 30.0, (np.sin(safe) - safe * np.cos(safe)) / safe**2
-    )
-    even = half * sinc * np.cos(np.outer(x, middle))
-    odd = half * g * np.sin(np.outer(x, middle))
-    weights = np.zeros((x.size, nodes.size))
-    weights[:, :-1] += even + odd
-    weights[:, 1:] += even - odd
-    return weights
+@numba.njit(cache=True, nogil=True)
+def filon_cosine_kernel(nodes, values, x):
+    """∫ h(ξ) cos(ξx) dξ over [nodes[0], nodes[-1]] for h linear between the nodes.
+
+    Filon's rule: on a panel of half-width c about ξ_m, with h = h̄ + s(ξ − ξ_m) and θ = c x,
+    ∫ h cos ξx dξ = 2c h̄ sinc θ cos ξ_m x − 2c² s g(θ) sin ξ_m x, g(θ) = (sin θ − θ cos θ)/θ²
+    (series below |θ| = 1e-3, where the closed forms cancel). values (n_nodes, n_cols) complex,
+    x (n_x,); returns (n_x, n_cols).
+    """
+    n_cols = values.shape[1]
+    out = np.zeros((x.size, n_cols), np.complex128)
+    for i in range(x.size):
+        for p in range(nodes.size - 1):
+            half = 0.5 * (nodes[p + 1] - nodes[p])
+            theta = half * x[i]
+            if abs(theta) < 1e-3:
+                sinc = 1.0 - theta * theta / 6.0
+                g = theta / 3.0 - theta**3 / 30.0
+            else:
+                sinc = math.sin(theta) / theta
+                g = (sinc - math.cos(theta)) / theta
+            middle_phase = 0.5 * (nodes[p + 1] + nodes[p]) * x[i]
+            even = half * sinc * math.cos(middle_phase)
+            odd = half * g * math.sin(middle_phase)
+            left = even + odd
+            right = even - odd
+            for c in range(n_cols):
+                out[i, c] += left * values[p, c] + right * values[p + 1, c]
+    return out
 
 
 def point_load_response(
@@ -626,10 +637,10 @@ def point_load_response(
     for i, nodes in enumerate(grids):
         h = h_all[start : start + nodes.size]
         start += nodes.size
-        response[i] = _filon_cosine_weights(nodes, x) @ h / np.pi
-        coarse = _filon_cosine_weights(nodes[::2], x) @ h[::2] / np.pi
+        response[i] = filon_cosine_kernel(nodes, h, x) / np.pi
+        coarse = filon_cosine_kernel(nodes[::2], np.ascontiguousarray(h[::2]), x) / np.pi
         if (nodes.size - 1) % 2:  # the coarse rule must reach ξ_max too
-            coarse += _filon_cosine_weights(nodes[-2:], x) @ h[-2:] / np.pi
+            coarse += filon_cosine_kernel(nodes[-2:], np.ascontiguousarray(h[-2:]), x) / np.pi
         scale = np.abs(response[i]).max(axis=0)
         error = np.abs(response[i] - coarse).max(axis=0) / 3.0
         tail = np.abs(h[-1]) * nodes[-1] / (3.0 * np.pi)
