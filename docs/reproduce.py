@@ -93,6 +93,9 @@ def main() -> None:
     shared = StageCache()  # the 2.5D run reuses the paper run's vehicle–track stage
     train = run(Scenario.paper(), cache=shared)
     moving = run(Scenario.paper_2p5d(), cache=shared)
+    smooth_scenario = Scenario.paper_2p5d()
+    smooth_scenario.irregularity.enabled = False
+    smooth = run(smooth_scenario, cache=shared)
     readings = {
         name: run(Scenario.preset(name), cache=None)
         for name in ("paper_soil_wave_speeds", "paper_soil_lame")
@@ -230,12 +233,12 @@ def main() -> None:
                 f"{p[-1] * MM:.3f}",
             )
         )
-    lines += ["", *model_comparison(train, moving), "", NOTES.strip(), ""]
+    lines += ["", *model_comparison(train, moving, smooth), "", NOTES.strip(), ""]
     OUT.write_text("\n".join(lines), encoding="utf-8")
     print(f"wrote {OUT}")
 
 
-def model_comparison(flat, moving) -> list[str]:
+def model_comparison(flat, moving, smooth) -> list[str]:
     """Section: the paper's 2D section against the 2.5D moving-load model (MODEL.md §9)."""
     scenario = moving.scenario
     tunnel, soil = scenario.tunnel, scenario.soil
@@ -286,8 +289,37 @@ def model_comparison(flat, moving) -> list[str]:
         "ground still sees a long, nearly line-like load in both; the 2.5D profile decays "
         "slightly slower relative to its smaller invert value. The paper's faster decay "
         "(2.94/6.72 = 0.44 at 11 m) is not explained by the missing third dimension.",
+        "",
+        *irregular_rail_note(moving, smooth),
     ]
     return lines
+
+
+def irregular_rail_note(rough, smooth) -> list[str]:
+    """Size of the irregular rail's part of the 2.5D response: the moving-frame error's scale."""
+    rows = [int(np.argmin(np.abs(rough.soil.depth_m - d))) for d in (0.0, 11.0)]
+    peak = [float(smooth.soil.peak_disp_m[r]) for r in rows]
+    change = [float(rough.soil.peak_disp_m[r]) / p - 1 for r, p in zip(rows, peak, strict=True)]
+    part = [
+        float(np.abs(rough.soil.disp_m[r] - smooth.soil.disp_m[r]).max()) / p
+        for r, p in zip(rows, peak, strict=True)
+    ]
+    force = rough.vehicle_track.block_force_N.max() / smooth.vehicle_track.block_force_N.max() - 1
+    return [
+        "**Irregular rail and the moving frame.** On a smooth rail the force under every block "
+        "is the monitored block's force delayed by x_j/v, and H(ω, ω/v)Q(ω) equals the direct "
+        "sum over the blocks (tested: < 1 %, 0.06 % at the invert and 0.4 % at 11 m). With "
+        "irregularity the dynamic part of the wheel forces moves with the wheels while it "
+        "oscillates (its exact wavenumber is (ω − ω′)/v, not ω/v), so the moving-frame "
+        "evaluation of the monitored block's force is an approximation for that part only. Its "
+        f"size here: the class-6 irregularity changes the peak block force by {force:+.1%} and "
+        f"the 2.5D peak displacement by {change[0]:+.2%} at the invert and {change[1]:+.2%} at "
+        f"11 m (smooth rail: {peak[0] * MM:.3f} and {peak[1] * MM:.3f} mm); the largest "
+        "difference between the rough- and smooth-rail displacement histories is "
+        f"{part[0]:.1%} of the peak at the invert and {part[1]:.1%} at 11 m. The moving-frame "
+        "treatment evaluates that part at a shifted wavenumber (a different spreading, not a "
+        "different order of magnitude), so its error on the peaks is of this order.",
+    ]
 
 
 NOTES = """
