@@ -78,12 +78,12 @@ from model.tunnel_soil import (
 
 # ---- kernel -----------------------------------------------------------------------------------
 @numba.njit(cache=True, nogil=True)
-def _field_vectors(n, r, xi, delta_p, delta_s, omega2_rho, k1sq, k2sq, beta2, shear, lame):
+def _field_vectors(n, r, xi, delta_p, delta_s, omega2_rho, k1sq, k2sq, shear, lame):
     """(U_r, Ũ, S_rr, S_θθ, S_xx, S̃_rx) at θ-phase cos of the four field vectors at r.
 
     Returned as four 6-tuples per unit e: grad_P, the sum grad_P + SV, the difference
     grad_S − grad_P and the axial unit field e_x (module docstring); omega2_rho = ρω²,
-    k1sq = k₁², k2sq = k₂², beta2 = β². Static parts that cancel in the sum and the
+    k1sq = k₁², k2sq = k₂². Static parts that cancel in the sum and the
     difference are cancelled analytically.
     """
     inv_r = 1.0 / r
@@ -130,7 +130,7 @@ def _field_vectors(n, r, xi, delta_p, delta_s, omega2_rho, k1sq, k2sq, beta2, sh
 
 
 @numba.njit(cache=True, nogil=True)
-def _shear_row_stresses(n, r, xi, delta_p, delta_s, beta2, shear):
+def _shear_row_stresses(n, r, delta_p, delta_s, beta2, shear):
     """S_rθ (sin-phase) of grad_P, of the sum grad_P + SV and of grad_S − grad_P at r."""
     inv_r = 1.0 / r
     two_mu = 2.0 * shear
@@ -174,7 +174,7 @@ def _interface_amplitudes(
     # Shell bending beyond the ring's, k ζ²(ζ² + 2n²), added to the ring's (n² − 1)² term.
     s33 = inertia + stiff * (1.0 + k_shell * z2 * (z2 + 2.0 * n * n)) + ring_bending
     grad_p, total, diff, unit_axial = _field_vectors(
-        n, a, xi, delta_p, delta_s, omega2_rho, k1sq, k2sq, beta2, shear, lame
+        n, a, xi, delta_p, delta_s, omega2_rho, k1sq, k2sq, shear, lame
     )
     # Column Z: SH − ξ grad_P = ξ (grad_S − grad_P) + k₂² e_x at r = a.
     z_col = (
@@ -192,7 +192,7 @@ def _interface_amplitudes(
         m11 = s11 * z_col[1] + s13 * z_col[0] - z_col[5]
         det = m00 * m11 - m01 * m10
         return m11 / det, 0j, -m10 / det
-    srt_p, srt_sum, srt_diff = _shear_row_stresses(n, a, xi, delta_p, delta_s, beta2, shear)
+    srt_p, srt_sum, srt_diff = _shear_row_stresses(n, a, delta_p, delta_s, beta2, shear)
     srt_z = xi * srt_diff
     # Radial − tangential row, formed analytically (the K/a² terms cancel for n = 1 at ζ = 0).
     d_u = s13 - s12
@@ -269,7 +269,6 @@ def shell_soil_field_kernel(
         omega2_rho = w * w * density
         k1sq = w * w * slowness2_p
         k2sq = w * w * slowness2_s
-        beta2 = beta * beta
         k0p_a = _bessel_ratios(alpha * a, n_max, ratio_p_a)
         k0s_a = _bessel_ratios(beta * a, n_max, ratio_s_a)
         for n in range(n_max + 1):
@@ -313,14 +312,14 @@ def shell_soil_field_kernel(
                 c_p = amp_x[n] * e_p + (amp_y[n] - q * amp_z[n]) * (e_p - e_s)
                 c_sum = amp_y[n] * e_s
                 c_diff = q * amp_z[n] * e_s
-                c_axial = k2sq * amp_z[n] * e_s
                 # U_r of grad_P, of the sum and of the difference: −n/r − δ_P, −δ_P, δ_P − δ_S
                 u_r[i, j] += (
                     c_p * (-n / r - delta_p) - c_sum * delta_p + c_diff * (delta_p - delta_s)
                 )
                 if with_stresses:
+                    c_axial = k2sq * amp_z[n] * e_s
                     grad_p, total, diff, unit_axial = _field_vectors(
-                        n, r, q, delta_p, delta_s, omega2_rho, k1sq, k2sq, beta2, shear, lame
+                        n, r, q, delta_p, delta_s, omega2_rho, k1sq, k2sq, shear, lame
                     )
                     s_rr[i, j] += (
                         c_p * grad_p[2] + c_sum * total[2] + c_diff * diff[2]
