@@ -14,8 +14,9 @@ import scipy.signal
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from model.params import Scenario  # noqa: E402
-from model.pipeline import run  # noqa: E402
+from model.params import Scenario, Tunnel  # noqa: E402
+from model.pipeline import StageCache, run  # noqa: E402
+from model.tunnel_soil_3d import point_load_response, receptance_2p5d  # noqa: E402
 
 OUT = ROOT / "docs" / "reproduction.md"
 MM = 1e3
@@ -57,9 +58,44 @@ def row(*cells) -> str:
     return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
+def beam_on_soil_length(tunnel, soil) -> tuple[float, float, float]:
+    """(L, EI, k): the lining as a beam on the soil, L = (4EI/k)^¼ (m).
+
+    EI = E π a³ h (1 + h²/4a²) is the thick tube's bending stiffness; k (N/m²) is the soil's
+    own spring per unit length at the wavenumber ξ = 1/L of the bending it resists: the
+    inverse of the n = 1 quasi-static displacement of the bare cavity (lining made to vanish)
+    under a unit line load, from the 2.5D model at 0.01 Hz. Iterated to a fixed point.
+    """
+    a, h = tunnel.ring_radius, tunnel.thickness
+    bending = tunnel.youngs_modulus * np.pi * a**3 * h * (1 + h**2 / (4 * a**2))
+    cavity = Tunnel(youngs_modulus=1.0, density=1e-6)
+    length = 25.0
+    for _ in range(30):
+        xi = 1.0 / length
+        u1 = (
+            receptance_2p5d(0.01, xi, 0.0, cavity, soil, 1)
+            - receptance_2p5d(0.01, xi, 0.0, cavity, soil, 0)
+        )[0, 0].real
+        spring = 1.0 / u1
+        length = (4 * bending / spring) ** 0.25
+    return length, bending, spring
+
+
+def half_width(x_m: np.ndarray, profile: np.ndarray) -> float:
+    """Distance from x = 0 at which a profile peaked at x = 0 falls to half its peak (m)."""
+    below = np.flatnonzero(profile < 0.5 * profile[0])
+    return float(np.interp(0.5 * profile[0], profile[below[0] : below[0] - 2 : -1],
+                           x_m[below[0] : below[0] - 2 : -1]))  # fmt: skip
+
+
 def main() -> None:
     bogie = run(Scenario.preset("single_bogie"), cache=None)
-    train = run(Scenario.paper(), cache=None)
+    shared = StageCache()  # the 2.5D run reuses the paper run's vehicle–track stage
+    train = run(Scenario.paper(), cache=shared)
+    moving = run(Scenario.paper_2p5d(), cache=shared)
+    smooth_scenario = Scenario.paper_2p5d()
+    smooth_scenario.irregularity.enabled = False
+    smooth = run(smooth_scenario, cache=shared)
     readings = {
         name: run(Scenario.preset(name), cache=None)
         for name in ("paper_soil_wave_speeds", "paper_soil_lame")
@@ -197,9 +233,93 @@ def main() -> None:
                 f"{p[-1] * MM:.3f}",
             )
         )
-    lines += ["", NOTES.strip(), ""]
+    lines += ["", *model_comparison(train, moving, smooth), "", NOTES.strip(), ""]
     OUT.write_text("\n".join(lines), encoding="utf-8")
     print(f"wrote {OUT}")
+
+
+def model_comparison(flat, moving, smooth) -> list[str]:
+    """Section: the paper's 2D section against the 2.5D moving-load model (MODEL.md §9)."""
+    scenario = moving.scenario
+    tunnel, soil = scenario.tunnel, scenario.soil
+    length, bending, spring = beam_on_soil_length(tunnel, soil)
+    x = np.linspace(0.0, 80.0, 161)
+    static = point_load_response(0.01, x, [0.0, 11.0], tunnel, soil, 32)[0].real
+    depths = (0.0, 5.0, 11.0, 20.0, 35.0)
+    peak = {
+        name: [float(np.interp(d, r.soil.depth_m, r.soil.peak_disp_m)) * MM for d in depths]
+        for name, r in (("2d", flat), ("2.5d", moving))
+    }
+    lines = [
+        "## The 2D section against the 2.5D moving-load model (MODEL.md §9)",
+        "",
+        "Same vehicle–track run (`Scenario.paper()` and `Scenario.paper_2p5d()` share it), same",
+        "line load q = 2F_b/L_s; the 2D model applies it to the whole tunnel at once, the 2.5D",
+        "model to a lining that is a Flügge shell along the tunnel, with the load moving at",
+        f"v = {scenario.train.speed:.1f} m/s (kernel at ξ = ω/v; docs/tunnel_soil_3d.md).",
+        "",
+        row("depth (m)", *[f"{d:g}" for d in depths]),
+        row("---", *["---"] * len(depths)),
+        row("2D peak displacement (mm)", *[f"{p:.2f}" for p in peak["2d"]]),
+        row("2.5D peak displacement (mm)", *[f"{p:.2f}" for p in peak["2.5d"]]),
+        row("2.5D / 2D", *[f"{b / a:.2f}" for a, b in zip(peak["2d"], peak["2.5d"], strict=True)]),
+        row("2D, relative to the invert", *[f"{p / peak['2d'][0]:.2f}" for p in peak["2d"]]),
+        row("2.5D, relative to the invert", *[f"{p / peak['2.5d'][0]:.2f}" for p in peak["2.5d"]]),
+        "",
+        f"**Beam on soil.** Along the tunnel the lining bends as a tube, EI = Eπa³h(1 + h²/4a²) "
+        f"= {bending:.3g} N·m², on the soil's spring k = {spring / 1e6:.2f} MN/m² "
+        f"({spring / soil.shear_modulus:.2f} μ; the inverse of the bare cavity's n = 1 "
+        f"displacement per unit line load at the wavenumber 1/L, quasi-static). The "
+        f"beam-on-soil length (4EI/k)^¼ = {length:.1f} m is the distance over which the "
+        "lining spreads a load along the tunnel (a Winkler beam's deflection under a point "
+        "force falls to e^(−x/L)(cos + sin)(x/L)). In the 2.5D model the quasi-static invert "
+        "displacement under a point force on the invert falls to half its peak at "
+        f"x = {half_width(x, static[:, 0]):.1f} m (at 11 m below: "
+        f"{half_width(x, static[:, 1]):.1f} m).",
+        "",
+        "**What the 2D simplification does.** The 2D section loads an infinite length of "
+        "tunnel with the force of one block; its static response to a line load is infinite "
+        "(the n = 1 term grows like ln 1/ω), so the peak is set by how long the load lasts. "
+        "In the 2.5D model each axle loads about 2L of lining, the response to a moving point "
+        "force is finite, and the train's axles add up only where their spread loads overlap. "
+        f"The invert peak is {peak['2.5d'][0] / peak['2d'][0]:.0%} of the 2D one. The depth "
+        "decay is nearly the same in the two models here: the loaded length (the "
+        f"{scenario.train.n_cars * scenario.train.car_length:.0f} m train, each axle spread "
+        "over ~2L) is larger than the depths of interest, so at 0–35 m the "
+        "ground still sees a long, nearly line-like load in both; the 2.5D profile decays "
+        "slightly slower relative to its smaller invert value. The paper's faster decay "
+        "(2.94/6.72 = 0.44 at 11 m) is not explained by the missing third dimension.",
+        "",
+        *irregular_rail_note(moving, smooth),
+    ]
+    return lines
+
+
+def irregular_rail_note(rough, smooth) -> list[str]:
+    """Size of the irregular rail's part of the 2.5D response: the moving-frame error's scale."""
+    rows = [int(np.argmin(np.abs(rough.soil.depth_m - d))) for d in (0.0, 11.0)]
+    peak = [float(smooth.soil.peak_disp_m[r]) for r in rows]
+    change = [float(rough.soil.peak_disp_m[r]) / p - 1 for r, p in zip(rows, peak, strict=True)]
+    part = [
+        float(np.abs(rough.soil.disp_m[r] - smooth.soil.disp_m[r]).max()) / p
+        for r, p in zip(rows, peak, strict=True)
+    ]
+    force = rough.vehicle_track.block_force_N.max() / smooth.vehicle_track.block_force_N.max() - 1
+    return [
+        "**Irregular rail and the moving frame.** On a smooth rail the force under every block "
+        "is the monitored block's force delayed by x_j/v, and H(ω, ω/v)Q(ω) equals the direct "
+        "sum over the blocks (tested: < 1 %, 0.06 % at the invert and 0.4 % at 11 m). With "
+        "irregularity the dynamic part of the wheel forces moves with the wheels while it "
+        "oscillates (its exact wavenumber is (ω − ω′)/v, not ω/v), so the moving-frame "
+        "evaluation of the monitored block's force is an approximation for that part only. Its "
+        f"size here: the class-6 irregularity changes the peak block force by {force:+.1%} and "
+        f"the 2.5D peak displacement by {change[0]:+.2%} at the invert and {change[1]:+.2%} at "
+        f"11 m (smooth rail: {peak[0] * MM:.3f} and {peak[1] * MM:.3f} mm); the largest "
+        "difference between the rough- and smooth-rail displacement histories is "
+        f"{part[0]:.1%} of the peak at the invert and {part[1]:.1%} at 11 m. The moving-frame "
+        "treatment evaluates that part at a shifted wavenumber (a different spreading, not a "
+        "different order of magnitude), so its error on the peaks is of this order.",
+    ]
 
 
 NOTES = """
@@ -221,7 +341,7 @@ harmonic count, and its soil equations carry only the P potential, which cannot 
 interface conditions; each of these changes the depth decay. We keep the consistent model of
 MODEL.md §7 and show, in the tests, that our peak converges in record length (zero padding)
 and harmonics, rather than tune it. A true 3D (2.5D) tunnel model would spread the load along
-the tunnel and make the decay faster; it is listed as later work in MODEL.md §9.
+the tunnel; the section above compares it with the 2D model.
 
 A side effect to know when reading the time histories: constant hysteretic damping is not
 causal, so the invert moves about 1–2 % of its peak before the first axle arrives.

@@ -46,6 +46,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from model.settlement import padded_record_grid
 from model.tunnel_soil import soil_field
+from model.tunnel_soil_3d import StressField, invert_stress_2p5d
 
 GRAVITY = 9.81  # m/s²
 WATER_DENSITY = 1000.0  # kg/m³
@@ -63,22 +64,6 @@ N_LAW_PARAMETERS = 3  # a, b, m
 
 
 # ---- dynamic stresses under the invert -------------------------------------------------------
-@dataclass(frozen=True)
-class StressField:
-    """Stress transfer functions under the invert, complex (n_freq, n_depth).
-
-    Pa per unit downward line load amplitude (N/m) at the invert, θ = 0, x = 0, tension
-    positive, exp(+iωt); the same six components as ``model.tunnel_soil_3d.StressField``.
-    """
-
-    sigma_rr: np.ndarray
-    sigma_thetatheta: np.ndarray
-    sigma_xx: np.ndarray
-    sigma_rtheta: np.ndarray
-    sigma_rx: np.ndarray
-    sigma_thetax: np.ndarray
-
-
 STRESS_COMPONENTS = (
     "sigma_rr",
     "sigma_thetatheta",
@@ -156,9 +141,12 @@ def stress_transfer(freq_hz, depth_m, scenario) -> StressField:
     StressField
         Complex (n_freq, n_depth), Pa per N/m.
     """
-    return plane_strain_stress_transfer(
-        freq_hz, depth_m, scenario.tunnel, scenario.soil, scenario.numerics.n_harmonics
-    )
+    tunnel, soil, n_harmonics = scenario.tunnel, scenario.soil, scenario.numerics.n_harmonics
+    if tunnel.model == "2.5d":  # the moving train: the kernel at ξ = ω/v (docs/model.md §9)
+        freq = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+        wavenumber = 2.0 * np.pi * freq / scenario.train.speed
+        return invert_stress_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics)
+    return plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics)
 
 
 def deviator_stress(

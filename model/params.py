@@ -784,6 +784,36 @@ class Numerics(param.Parameterized):
         "model.settlement.soil_response. Bounds 2–2000: a profile needs two points; memory grows "
         "as depths × padded samples (run-cost guard).",
     )
+    n_wavenumbers = Count(
+        384,
+        bounds=(16, 100000),
+        softbounds=(128, 4096),
+        label="Wavenumber points",
+        doc="Points of the base grid of the wavenumber integral of the 2.5D point-load response "
+        "(model.tunnel_soil_3d.point_load_response): uniform in asinh(ξ/ξ_c) on [0, max "
+        "wavenumber], plus refinements at the P and S wavenumbers ω/c.",
+    )
+    max_wavenumber = _q(
+        20.0,
+        (0, None),
+        (5.0, 100.0),
+        "Largest wavenumber (rad/m)",
+        "Upper limit ξ_max of the wavenumber integral of the 2.5D point-load response "
+        "(model.tunnel_soil_3d.point_load_response); the tail beyond is estimated and must be "
+        "below the wavenumber tolerance.",
+        (False, True),
+    )
+    wavenumber_tolerance = _q(
+        1e-3,
+        (0, 1),
+        (1e-5, 1e-2),
+        "Wavenumber integral tolerance (-)",
+        "Largest estimated error of the 2.5D wavenumber integral "
+        "(model.tunnel_soil_3d.point_load_response), relative to the largest response at the "
+        "same frequency and depth; a larger estimate raises an error naming the numerics "
+        "parameter to raise.",
+        (False, True),
+    )
 
 
 # Li & Selig (1996) parameter sets (a in %, b, m) by soil class (MODEL.md §10).

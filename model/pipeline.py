@@ -47,6 +47,9 @@ INVARIANT_TOLERANCE = 1e-6
 # (checked by the tests), so that no setting is silently left out of a cache key.
 VEHICLE_TRACK_NUMERICS = ("dt", "n_rail_modes", "rail_end_margin", "approach_distance")
 LOAD_NUMERICS = ("psd_segment",)
+# Numerics of the 2.5D model's wavenumber integral (model.tunnel_soil_3d.point_load_response):
+# in the soil key only when tunnel.model is "2.5d", so they never invalidate a 2D result.
+WAVENUMBER_NUMERICS = ("n_wavenumbers", "max_wavenumber", "wavenumber_tolerance")
 SOIL_NUMERICS = (
     "n_harmonics",
     "soil_max_frequency",
@@ -54,6 +57,7 @@ SOIL_NUMERICS = (
     "psd_segment",
     "max_depth",
     "n_depths",
+    *WAVENUMBER_NUMERICS,
 )
 
 STAGES = ("vehicle_track", "load", "soil", "stress", "longterm")
@@ -181,12 +185,17 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
         )
     vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
     load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
+    moving_load = scenario.tunnel.model == "2.5d"
     soil = {
         "upstream": load,
-        "tunnel": data["tunnel"],
+        "tunnel": data["tunnel"],  # includes tunnel.model
         "soil": data["soil"],
-        "numerics": pick(SOIL_NUMERICS),
+        "numerics": pick(
+            name for name in SOIL_NUMERICS if moving_load or name not in WAVENUMBER_NUMERICS
+        ),
     }
+    if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v
+        soil["speed_kmh"] = data["train"]["speed_kmh"]
     stress = {"upstream": soil}
     longterm = {"upstream": stress, "longterm": data["longterm"]}
     return {
@@ -280,6 +289,7 @@ def run(
             scenario.tunnel,
             scenario.soil,
             scenario.numerics,
+            speed_m_s=scenario.train.speed,
         ),
     )
     stress = stage(
@@ -383,11 +393,23 @@ def scenario_warnings(scenario: Scenario) -> list[str]:
     """Warnings for inputs where the model's simplifications start to matter (not errors)."""
     warnings = []
     speed, shear_speed = scenario.train.speed, scenario.soil.s_wave_speed
-    if speed > 0.7 * shear_speed:
+    ratio = f"train speed {speed:.1f} m/s is {speed / shear_speed:.0%} of the soil shear-wave "
+    if scenario.tunnel.model == "2.5d" and speed >= shear_speed:
         warnings.append(
-            f"train speed {speed:.1f} m/s is {speed / shear_speed:.0%} of the soil shear-wave "
-            f"speed {shear_speed:.1f} m/s: moving-load effects, which the 2D plane-strain tunnel "
-            "model ignores, become important"
+            ratio + f"speed {shear_speed:.1f} m/s: the load outruns the shear waves (Mach "
+            "cone), the response changes character, radiating energy behind the train and "
+            "extending far from the tunnel; computed, but outside the usual metro range"
+        )
+    elif speed > 0.7 * shear_speed:
+        warnings.append(
+            ratio
+            + f"speed {shear_speed:.1f} m/s: moving-load effects become important; "
+            + (
+                "the 2.5D model includes them and the response grows as the speed approaches "
+                "the shear-wave speed"
+                if scenario.tunnel.model == "2.5d"
+                else "the 2D plane-strain tunnel model ignores them (use tunnel.model = '2.5d')"
+            )
         )
     numerics, beta = scenario.numerics, scenario.track.winkler_beta
     if numerics.approach_distance * beta < 4.0:

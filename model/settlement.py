@@ -1,7 +1,10 @@
 """Displacement time histories below the tunnel and their peaks against depth (MODEL.md §8).
 
 The line load q(t) on the invert is Fourier transformed, multiplied by the invert receptance
-H(f, d) of ``model.tunnel_soil`` and transformed back, at every output depth d.
+H(f, d) of ``model.tunnel_soil`` and transformed back, at every output depth d. With the 2.5D
+model (``tunnel.model == "2.5d"``, MODEL.md §9) the receptance is that of
+``model.tunnel_soil_3d`` at the wavenumber ξ = ω/v of the train moving at speed v: the invert
+load is stationary in the moving frame, so U(ω, d) = H(ω, ω/v, d) Q(ω).
 
 Record handling:
 
@@ -20,6 +23,9 @@ Record handling:
   [0, h] is A + B(ln h − 1) = H(h/e); the DC bin therefore uses Re H(Δf/(2e)) (real because
   H(−f) = conj H(f)). Its contribution, ~ q̄ (ln T_pad)/T_pad, vanishes as the padding grows,
   and the tests show the peak displacement converging to the directly integrated transform.
+  In 2.5D the same holds along ξ = ω/v: U(0) = ∫u dt = (1/v)∫G(x) dx diverges logarithmically
+  (a point load's static displacement falls off like 1/|x|), and H(f, f/v) = A′ + B ln f to
+  O(f) (tested), so the DC bin uses Re H(h/e, h/(e v)) by the same argument.
 
 The peak is the maximum of the computed history as it stands (no baseline is subtracted).
 Frequency-independent hysteretic damping is not causal: with η_G = 0.06 the displacement moves
@@ -37,6 +43,7 @@ import scipy.fft
 
 from model.spectra import checked_record, fourier_transform, one_sided_psd
 from model.tunnel_soil import invert_receptance
+from model.tunnel_soil_3d import receptance_2p5d
 
 # Output samples per period of the highest retained frequency (see the module docstring).
 SAMPLES_PER_MAX_FREQUENCY_PERIOD = 4
@@ -111,12 +118,55 @@ def decimation_factor(dt_s: float, max_frequency_hz: float) -> int:
     )
 
 
+def section_receptance(
+    freq_hz, depth_m, tunnel, soil, n_harmonics: int, speed_m_s: float | None = None
+) -> np.ndarray:
+    """Invert receptance of the chosen tunnel model (m per N/m), complex (n_freq, n_depth).
+
+    ``tunnel.model == "2d"``: ``invert_receptance``; ``"2.5d"``: ``receptance_2p5d`` at the
+    wavenumber ξ = 2πf/v of a load moving at ``speed_m_s`` = v (MODEL.md §9).
+
+    Parameters
+    ----------
+    freq_hz : array_like
+        Frequencies (Hz), > 0.
+    depth_m : array_like
+        Depths below the ring–soil interface (m), ≥ 0.
+    tunnel, soil : model.params.Tunnel, model.params.Soil
+        Lining (its ``model`` chooses the kernel) and soil.
+    n_harmonics : int
+        Highest circumferential harmonic.
+    speed_m_s : float, optional
+        Train speed v (m/s), > 0; required for the 2.5D model.
+
+    Returns
+    -------
+    ndarray
+        Complex (n_freq, n_depth) receptance.
+    """
+    if tunnel.model != "2.5d":
+        return invert_receptance(freq_hz, depth_m, tunnel, soil, n_harmonics)
+    if speed_m_s is None or not (math.isfinite(speed_m_s) and speed_m_s > 0.0):
+        raise ValueError(
+            f"speed_m_s = {speed_m_s!r}: the 2.5D tunnel model needs the train speed, "
+            "finite and > 0 m/s"
+        )
+    freq = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    return receptance_2p5d(freq, 2.0 * np.pi * freq / speed_m_s, depth_m, tunnel, soil, n_harmonics)
+
+
 def dc_band_receptance(
-    band_halfwidth_hz: float, depth_m, tunnel, soil, n_harmonics: int
+    band_halfwidth_hz: float,
+    depth_m,
+    tunnel,
+    soil,
+    n_harmonics: int,
+    speed_m_s: float | None = None,
 ) -> np.ndarray:
     """Receptance averaged over the zero-frequency bin's band [−h, h] (m per N/m).
 
-    Re H(h/e): exact for H = A + B ln f, the 2D low-frequency form (module docstring).
+    Re H(h/e): exact for H = A + B ln f, the low-frequency form of the 2D receptance and of
+    the 2.5D one along ξ = ω/v (module docstring).
 
     Parameters
     ----------
@@ -128,13 +178,17 @@ def dc_band_receptance(
         Lining and soil.
     n_harmonics : int
         Highest circumferential harmonic.
+    speed_m_s : float, optional
+        Train speed (m/s), required for the 2.5D model.
 
     Returns
     -------
     ndarray
         Real (n_depth,) band-averaged receptance.
     """
-    return invert_receptance(band_halfwidth_hz / math.e, depth_m, tunnel, soil, n_harmonics)[0].real
+    return section_receptance(
+        band_halfwidth_hz / math.e, depth_m, tunnel, soil, n_harmonics, speed_m_s
+    )[0].real
 
 
 @dataclass(frozen=True)
@@ -207,7 +261,9 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     )
 
 
-def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> SoilResponse:
+def soil_response(
+    line_load_N_per_m, dt_s: float, tunnel, soil, numerics, speed_m_s: float | None = None
+) -> SoilResponse:
     """Displacement histories and peaks below the invert for a line-load history.
 
     Parameters
@@ -217,12 +273,14 @@ def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> Soi
     dt_s : float
         Sampling interval (s), > 0.
     tunnel : model.params.Tunnel
-        Lining.
+        Lining; ``tunnel.model`` chooses the 2D or the 2.5D kernel.
     soil : model.params.Soil
         Soil.
     numerics : model.params.Numerics
         Uses n_harmonics, soil_max_frequency, zero_pad_factor, psd_segment, max_depth,
         n_depths.
+    speed_m_s : float, optional
+        Train speed v (m/s): the 2.5D kernel is evaluated at ξ = ω/v (required for it).
 
     Returns
     -------
@@ -234,8 +292,12 @@ def soil_response(line_load_N_per_m, dt_s: float, tunnel, soil, numerics) -> Soi
 
     depth = np.linspace(0.0, numerics.max_depth, numerics.n_depths)
     receptance = np.empty((n_keep, depth.size), dtype=complex)
-    receptance[0] = dc_band_receptance(0.5 * f_hz[1], depth, tunnel, soil, numerics.n_harmonics)
-    receptance[1:] = invert_receptance(f_hz[1:], depth, tunnel, soil, numerics.n_harmonics)
+    receptance[0] = dc_band_receptance(
+        0.5 * f_hz[1], depth, tunnel, soil, numerics.n_harmonics, speed_m_s
+    )
+    receptance[1:] = section_receptance(
+        f_hz[1:], depth, tunnel, soil, numerics.n_harmonics, speed_m_s
+    )
 
     disp_spectrum = (receptance * load_spectrum[:, None]).T
     disp = grid.time_histories(disp_spectrum)
