@@ -842,7 +842,7 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
 
     Zimmermann: w(ξ) = (Pβ/2k) e^{−β|ξ|}(cos β|ξ| + sin β|ξ|) per static wheel load P,
     k = K_r K_s/((K_r + K_s) L_s), superposed over the wheels at their positions at ``t_s``; the
-    block, in series under the fastener, moves K_r/(K_r + K_s) of the rail deflection.
+    block, in series under the fastener, moves K_r/(K_r + K_s) = k L_s/K_s of the rail deflection.
 
     Parameters
     ----------
