@@ -75,9 +75,10 @@ STABILITY_SAFETY = 0.9
 # compression is ~0.08 mm and 10 mm would take 80 MN. (A gap of any size is a wheel in flight,
 # which the model follows and reports as loss of contact.)
 DIVERGENCE_COMPRESSION = 0.01
-# Irregularity sampled for linear interpolation at this spacing (m), or λ_min/100 if finer
-# (interpolation error < 5e-4 of the amplitude at λ_min).
+# Irregularity sampled for linear interpolation at this spacing (m), or at this many points per
+# shortest wavelength λ_min if finer (interpolation error < 5e-4 of the amplitude at λ_min).
 PROFILE_GRID_STEP = 0.005
+PROFILE_POINTS_PER_WAVELENGTH = 100
 MAX_OUTPUT_VALUES = 50_000_000  # 400 MB of float64 output
 MAX_CONTACT_EVENTS = 10_000
 PROGRESS_CALLS = 40
@@ -421,7 +422,8 @@ def assemble_wheels(
 
     Profile positions are measured from the monitored block, so the track under it does not
     change when a numerics setting changes the rail length. The profile is sampled every
-    ``PROFILE_GRID_STEP`` m (or λ_min/100 if finer) for the kernel's linear interpolation.
+    ``PROFILE_GRID_STEP`` m, or λ_min/``PROFILE_POINTS_PER_WAVELENGTH`` if finer, for the
+    kernel's linear interpolation.
 
     Parameters
     ----------
@@ -439,7 +441,9 @@ def assemble_wheels(
     """
     speed = float(scenario.train.speed)
     x0 = wheel_start_positions(scenario)
-    eta_step = min(PROFILE_GRID_STEP, scenario.irregularity.wavelength_min / 100.0)
+    eta_step = min(
+        PROFILE_GRID_STEP, scenario.irregularity.wavelength_min / PROFILE_POINTS_PER_WAVELENGTH
+    )
     start = x0.min() - eta_step
     n_grid = math.ceil((x0.max() + speed * duration_s - start) / eta_step) + 2
     grid = start + eta_step * np.arange(n_grid)
@@ -842,7 +846,7 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
 
     Zimmermann: w(ξ) = (Pβ/2k) e^{−β|ξ|}(cos β|ξ| + sin β|ξ|) per static wheel load P,
     k = K_r K_s/((K_r + K_s) L_s), superposed over the wheels at their positions at ``t_s``; the
-    block, in series under the fastener, moves K_r/(K_r + K_s) of the rail deflection.
+    block, in series under the fastener, moves K_r/(K_r + K_s) = k L_s/K_s of the rail deflection.
 
     Parameters
     ----------

@@ -5,6 +5,7 @@ ms each once compiled); the six-car train is run once per module.
 
 import math
 
+import numba
 import numpy as np
 import pytest
 from scipy.signal import find_peaks
@@ -159,6 +160,28 @@ def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
     block_acc = (fastener - tr.pad_k * z_block - tr.pad_c * v_block) / tr.block_mass
     np.testing.assert_allclose(state.qdd, rail_acc, atol=1e-10 * np.abs(rail_acc).max())
     np.testing.assert_allclose(dst @ state.sdd, block_acc, atol=1e-10 * np.abs(block_acc).max())
+
+
+def test_kernel_records_have_one_numba_type_across_scenarios():
+    """The records reach the kernels as typed named tuples: two scenarios that differ in sizes
+    and in values given as Python ints (speed 60, block mass 150), with or without prescribed
+    loads, give the same Numba types, so the cached compiled kernels serve both (no
+    recompilation per scenario)."""
+    first, second = Scenario.paper(), smooth_single_bogie()
+    second.train.speed_kmh = 60
+    second.track.block_mass = 150
+    for assemble in (vt.assemble_track, vt.assemble_vehicle, lambda s: vt.assemble_wheels(s, 1.0)):
+        assert numba.typeof(assemble(first)) == numba.typeof(assemble(second))
+    assert numba.typeof(vt.assemble_wheels(second, 1.0)) == numba.typeof(
+        vt.assemble_wheels(second, 1.0, prescribed_load_N=[1000, 2000])
+    )
+
+
+@pytest.mark.parametrize("loads", [[1e3], [1e3, -1.0]])
+def test_prescribed_loads_are_checked(loads):
+    """One non-negative load per wheel, else ValueError naming the argument."""
+    with pytest.raises(ValueError, match=r"prescribed_load_N = .* needs 2 loads ≥ 0 N"):
+        vt.assemble_wheels(smooth_single_bogie(), 1.0, prescribed_load_N=loads)
 
 
 def test_hertz_law():
