@@ -1,0 +1,29 @@
+"""Regression tests for defects found in review (one test per defect, each fails before its fix)."""
+
+from model.params import LongTerm
+
+# Six points at two stress levels whose strains fall slightly with N: the least-squares fit
+# gives b < 0, outside LongTerm.b's bounds (0, 1).
+FALLING_STRAINS_CSV = (
+    "N,strain,q_d,sigma_s\n"
+    "10,1.0,20,100\n100,0.9,20,100\n1000,0.8,20,100\n"
+    "10,2.0,40,100\n100,1.9,40,100\n1000,1.8,40,100\n"
+)
+
+
+def test_a_fit_outside_the_bounds_is_refused_whole_and_said_on_screen():
+    """Applying a fit with b < 0 must neither raise from the button nor half-apply.
+
+    Before the fix, ``param.update`` set law, soil class 'user' and a, then refused b: the
+    callback raised and the long-term stage ran with the fitted a and the default b, m.
+    """
+    from dashboard.longterm_view import CalibrationPanel
+
+    longterm = LongTerm()
+    before = {name: getattr(longterm, name) for name in ("law", "soil_class", "a", "b", "m")}
+    panel = CalibrationPanel(longterm=longterm)
+    panel.load_text(FALLING_STRAINS_CSV, "falling.csv")
+    assert panel.fit is not None and panel.fit["b"] < 0.0
+    panel.apply()
+    assert {name: getattr(longterm, name) for name in before} == before
+    assert "Not applied" in panel.message.object and "LongTerm.b" in panel.message.object
