@@ -1,6 +1,10 @@
 """Regression tests for defects found in review (one test per defect, each fails before its fix)."""
 
+import pytest
+
+from model.longterm import range_weighted_cycles
 from model.params import LongTerm
+from model.pipeline import run
 
 # Six points at two stress levels whose strains fall slightly with N: the least-squares fit
 # gives b < 0, outside LongTerm.b's bounds (0, 1).
@@ -27,3 +31,21 @@ def test_a_fit_outside_the_bounds_is_refused_whole_and_said_on_screen():
     panel.apply()
     assert {name: getattr(longterm, name) for name in before} == before
     assert "Not applied" in panel.message.object and "LongTerm.b" in panel.message.object
+
+
+def test_a_passage_recorded_with_the_soil_already_loaded_counts_at_least_one_cycle(
+    cheap_scenario,
+):
+    """One pulse whose record starts and ends above zero (the 2.5D model: the whole train
+    loads the section through the lining at the record's start) is one passage, 0 → q_d → 0.
+
+    Before the fix [0.3, 1, 0.3] counted (0.7/2 + 0.7/2) = 0.7 cycles, and the single-bogie
+    run with the 2.5D model counted 0.84 cycles at the invert and 0.40 at 35 m. Exact
+    arithmetic for the synthetic pulse (rel 1e-12); the run: ≥ 1 at every depth (one bogie,
+    one pulse 0 → q_d → 0 at least).
+    """
+    assert range_weighted_cycles([0.3, 1.0, 0.3]) == pytest.approx(1.0, rel=1e-12)
+    assert range_weighted_cycles([0.0, 1.0, 0.0]) == pytest.approx(1.0, rel=1e-12)
+    scenario = cheap_scenario()
+    scenario.tunnel.model = "2.5d"
+    assert run(scenario).stress.rainflow_cycles.min() >= 1.0
