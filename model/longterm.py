@@ -776,6 +776,7 @@ def parse_triaxial_csv(text: str, source: str = "triaxial data") -> TriaxialData
     """
     rows, problems = [], []
     header_allowed = True
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark would hide the first number
     for line_number, fields in enumerate(csv.reader(io.StringIO(text)), start=1):
         if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith(COMMENT):
             continue

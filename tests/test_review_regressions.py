@@ -49,3 +49,13 @@ def test_a_passage_recorded_with_the_soil_already_loaded_counts_at_least_one_cyc
     scenario = cheap_scenario()
     scenario.tunnel.model = "2.5d"
     assert run(scenario).stress.rainflow_cycles.min() >= 1.0
+
+
+def test_a_byte_order_mark_does_not_drop_the_first_row_of_a_headerless_triaxial_csv():
+    """Before the fix "\\ufeff10" was not a number, so the first data row was taken for a
+    header and silently dropped (5 points read from 6)."""
+    from model.longterm import parse_triaxial_csv
+
+    rows = "10,1.0,20,100\n100,1.2,20,100\n1000,1.4,20,100\n10,2.0,40,100\n100,2.3,40,100\n"
+    data = parse_triaxial_csv("\ufeff" + rows + "1000,2.6,40,100\n", "bom.csv")
+    assert data.n_cycles.size == 6 and data.n_cycles[0] == 10.0
