@@ -87,7 +87,7 @@ CONTACT_EVENT_DTYPE = np.dtype(
 )
 
 
-@dataclass
+@dataclass(frozen=True)
 class VehicleTrackResult:
     """Time histories of one passage (SI; displacements down +, from the unloaded track).
 

@@ -59,3 +59,20 @@ def test_a_byte_order_mark_does_not_drop_the_first_row_of_a_headerless_triaxial_
     rows = "10,1.0,20,100\n100,1.2,20,100\n1000,1.4,20,100\n10,2.0,40,100\n100,2.3,40,100\n"
     data = parse_triaxial_csv("\ufeff" + rows + "1000,2.6,40,100\n", "bom.csv")
     assert data.n_cycles.size == 6 and data.n_cycles[0] == 10.0
+
+
+def test_stage_results_cannot_be_rebound_behind_the_cache(cheap_scenario):
+    """Arrays are read-only, but the vehicle–track and load results were plain dataclasses:
+    ``r.load.line_load_N_per_m = r.load.line_load_N_per_m / 1e3`` (to kN/m) changed what the
+    cache served to the next run. Every stage result must refuse the assignment."""
+    import dataclasses
+
+    from model.pipeline import STAGES, StageCache
+
+    cache = StageCache()
+    results = run(cheap_scenario(), cache=cache)
+    for stage in STAGES:
+        value = getattr(results, stage)
+        name = dataclasses.fields(value)[0].name
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(value, name, getattr(value, name))
