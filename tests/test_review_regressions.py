@@ -103,3 +103,14 @@ def test_the_run_estimate_counts_the_stress_stage(cheap_scenario):
     assert estimate.memory_bytes["stress"] >= peak
     assert estimate.seconds["stress"] > estimate.seconds["soil"]
     assert "numerics.n_depths" in estimate.blame["stress"]
+
+
+def test_the_vehicle_track_warnings_cannot_be_appended_to_behind_the_cache(cheap_scenario):
+    """The warnings list of a cached vehicle–track result was shared: a caller's append showed
+    up in the warnings of every later run served from the cache."""
+    from model.pipeline import StageCache
+
+    scenario, cache = cheap_scenario(), StageCache()
+    first = run(scenario, cache=cache)
+    assert isinstance(first.vehicle_track.warnings, tuple)
+    assert run(scenario, cache=cache).warnings == first.warnings
