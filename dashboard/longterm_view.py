@@ -143,8 +143,18 @@ def fit_summary(fit: dict[str, float]) -> str:
 
 
 def apply_fit(longterm: LongTerm, fit: dict[str, float]) -> None:
-    """Use fitted a, b, m: Li & Selig's law with soil class 'user' (one update, one event)."""
-    longterm.param.update(law="li_selig", soil_class="user", a=fit["a"], b=fit["b"], m=fit["m"])
+    """Use fitted a, b, m: Li & Selig's law with soil class 'user' (one update, one event).
+
+    All or nothing: a fitted value outside its parameter's bounds (e.g. b ≤ 0 from strains that
+    do not grow with N) raises ValueError and leaves ``longterm`` unchanged.
+    """
+    values = {"law": "li_selig", "soil_class": "user", "a": fit["a"], "b": fit["b"], "m": fit["m"]}
+    before = {name: getattr(longterm, name) for name in values}
+    try:
+        longterm.param.update(**values)
+    except ValueError:
+        longterm.param.update(**before)
+        raise
 
 
 LONGTERM_PLOTS = (
@@ -194,11 +204,14 @@ class CalibrationPanel(pn.viewable.Viewer):
 
     def apply(self) -> None:
         """Write the current fit into ``longterm``."""
-        if self.fit is not None:
+        if self.fit is None:
+            return
+        try:
             apply_fit(self.longterm, self.fit)
-            self.message.object += (
-                f"\n\nApplied to the long-term settlement: {fit_summary(self.fit)}"
-            )
+        except ValueError as error:
+            self.message.object += f"\n\n**Not applied:** {error}"
+            return
+        self.message.object += f"\n\nApplied to the long-term settlement: {fit_summary(self.fit)}"
 
     def _on_upload(self, event) -> None:
         """FileInput callback: decode the bytes and load them."""

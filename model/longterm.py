@@ -244,6 +244,9 @@ def range_weighted_cycles(history) -> float:
     Σ count_i · range_i / max(history), with count 1 for full and ½ for half cycles (ASTM
     E1049, the ``rainflow`` package): k pulses from zero to the same peak count k, small
     ripples count in proportion to their size. 0 for a history that never exceeds 0.
+    The history is taken to start and end at zero (no train before the passage, none after):
+    a record that begins or ends with the train still loading the soil (the 2.5D model's
+    long-range field) would otherwise count one passage as less than one cycle.
 
     Parameters
     ----------
@@ -255,8 +258,8 @@ def range_weighted_cycles(history) -> float:
     float
         Equivalent number of cycles.
     """
-    series = np.asarray(history, dtype=float)
-    peak = float(series.max()) if series.size else 0.0
+    series = np.concatenate([[0.0], np.asarray(history, dtype=float), [0.0]])
+    peak = float(series.max())
     if peak <= 0.0:
         return 0.0
     slope = np.sign(np.diff(series))
@@ -773,6 +776,7 @@ def parse_triaxial_csv(text: str, source: str = "triaxial data") -> TriaxialData
     """
     rows, problems = [], []
     header_allowed = True
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark would hide the first number
     for line_number, fields in enumerate(csv.reader(io.StringIO(text)), start=1):
         if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith(COMMENT):
             continue

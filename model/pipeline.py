@@ -70,7 +70,7 @@ class SimulationError(RuntimeError):
 Progress = Callable[[str, float], None]
 
 
-@dataclass
+@dataclass(frozen=True)
 class LoadResult:
     """2D line load on the tunnel section and its spectrum."""
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -88,7 +88,7 @@ CONTACT_EVENT_DTYPE = np.dtype(
 )
 
 
-@dataclass
+@dataclass(frozen=True)
 class VehicleTrackResult:
     """Time histories of one passage (SI; displacements down +, from the unloaded track).
 
@@ -107,7 +107,7 @@ class VehicleTrackResult:
     monitored_block_x_m: float
     contact_loss: np.ndarray  # CONTACT_EVENT_DTYPE records: wheel, t_s, x_m, duration_s
     unstable: bool
-    warnings: list[str] = field(default_factory=list)
+    warnings: tuple[str, ...] = ()  # a tuple: the stage cache shares this result
     static_wheel_load_N: float = 0.0
     dt_s: float = 0.0
     stable_dt_s: float = 0.0
@@ -937,7 +937,7 @@ def simulate(
         monitored_block_x_m=track.monitored_x,
         contact_loss=events,
         unstable=run.diverged is not None,
-        warnings=warnings,
+        warnings=tuple(warnings),
         static_wheel_load_N=float(static_wheel_loads(vehicle, wheels)[0]),
         dt_s=dt,
         stable_dt_s=stable_dt,

@@ -238,7 +238,7 @@ def test_quasi_static_passage_matches_static_load_and_winkler_beam():
     assert load * track.winkler_beta / (2 * track.winkler_modulus) == pytest.approx(
         0.78e-3, abs=0.005e-3
     )
-    assert not result.unstable and result.warnings == [] and result.contact_loss.size == 0
+    assert not result.unstable and result.warnings == () and result.contact_loss.size == 0
 
 
 def test_block_force_is_pad_force_of_block_motion(bogie_run):
