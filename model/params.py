@@ -825,7 +825,8 @@ class LongTerm(param.Parameterized):
         (0.1, 5.0),
         "Law coefficient a (%)",
         "Coefficient a (or A of Monismith) of the strain law, ε_p in %; used (via "
-        "LongTerm.law_parameters) when the soil class is 'user' or the law is not Li & Selig.",
+        "LongTerm.law_parameters) when the soil class is 'user' or the law is not Li & Selig. "
+        "Bounds (0, 100] %: a strain beyond 100 % is failure, not accumulation.",
         (False, True),
     )
     b = _q(
@@ -834,7 +835,8 @@ class LongTerm(param.Parameterized):
         (0.05, 0.4),
         "Cycle exponent b (-)",
         "Exponent b of N in the strain law; used (via LongTerm.law_parameters) when the soil "
-        "class is 'user' or the law is not Li & Selig.",
+        "class is 'user' or the law is not Li & Selig. Bounds (0, 1): the strain grows with N, "
+        "but slower than linearly (published fits 0.1–0.3).",
         (False, False),
     )
     m = _q(
@@ -843,7 +845,8 @@ class LongTerm(param.Parameterized):
         (1.0, 4.0),
         "Stress exponent m (-)",
         "Exponent m of the stress ratio in the strain law; used (via LongTerm.law_parameters) "
-        "when the soil class is 'user' or the law is not Li & Selig.",
+        "when the soil class is 'user' or the law is not Li & Selig. Bounds (0, 10]: published "
+        "fits 1–4.",
         (False, True),
     )
     n = _q(
@@ -851,7 +854,8 @@ class LongTerm(param.Parameterized):
         (0, 10),
         (0.0, 3.0),
         "Static-stress exponent n (-)",
-        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law in model.longterm (default 1.0).",
+        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law in model.longterm (default 1.0). "
+        "Bounds [0, 10]: published fits 0–3.",
     )
     trains_per_day = _q(
         200.0,
@@ -859,7 +863,8 @@ class LongTerm(param.Parameterized):
         (10.0, 600.0),
         "Trains per day (-)",
         "Passages of the train over the section per day, both directions, n_d; with the cycles "
-        "per train it gives N(t) in model.longterm.",
+        "per train it gives N(t) in model.longterm. Bounds (0, 5000]: more is a train every 20 s "
+        "around the clock.",
         (False, True),
     )
     years = _q(
@@ -868,7 +873,8 @@ class LongTerm(param.Parameterized):
         (1.0, 100.0),
         "Years of service (yr)",
         "Service time t at which model.longterm reports the final settlement; the "
-        "settlement-time curve runs from one day of traffic to this time.",
+        "settlement-time curve runs from one day of traffic to this time. Bounds (0, 200] yr: "
+        "design lives are 100 yr.",
         (False, True),
     )
     cycles_per_train = param.Selector(
@@ -884,7 +890,8 @@ class LongTerm(param.Parameterized):
         (8.0, 40.0),
         "Tunnel axis depth (m)",
         "Depth of the tunnel axis below the ground surface, H_t, for the static stress state in "
-        "model.longterm; the paper gives none, 15 m is assumed.",
+        "model.longterm; the paper gives none, 15 m is assumed. Bounds (0, 200] m; "
+        "Scenario.validate requires the lining below the ground surface.",
         (False, True),
     )
     water_table_depth = _q(
@@ -893,7 +900,8 @@ class LongTerm(param.Parameterized):
         (0.0, 10.0),
         "Water table depth (m)",
         "Depth of the water table below the ground surface, z_w, for σ′_v0 in model.longterm "
-        "(soil above it is taken as dry at the same density).",
+        "(soil above it is taken as dry at the same density). Bounds [0, 200] m (0: at the "
+        "surface).",
     )
     friction_angle = _q(
         25.0,
@@ -901,7 +909,8 @@ class LongTerm(param.Parameterized):
         (15.0, 40.0),
         "Effective friction angle φ′ (°)",
         "Effective friction angle φ′; sets K0 = 1 − sin φ′ (Jaky, "
-        "LongTerm.earth_pressure_coefficient) for the static stress state in model.longterm.",
+        "LongTerm.earth_pressure_coefficient) for the static stress state in model.longterm. "
+        "Bounds (0, 60]°: soils have 15–45°.",
         (False, True),
     )
     cu_ratio = _q(
@@ -910,7 +919,8 @@ class LongTerm(param.Parameterized):
         (0.1, 0.5),
         "Undrained strength ratio c_u/σ′_v0 (-)",
         "Undrained shear strength as a ratio to the vertical effective stress (normally "
-        "consolidated clay); the static strength in model.longterm is σ_s = q_f = 2c_u.",
+        "consolidated clay); the static strength in model.longterm is σ_s = q_f = 2c_u. Bounds "
+        "(0, 2]: normally consolidated clays 0.2–0.3, heavily overconsolidated ones up to ~1.",
         (False, True),
     )
     undrained_strength = _q(
@@ -919,7 +929,7 @@ class LongTerm(param.Parameterized):
         (10e3, 200e3),
         "Undrained shear strength c_u (Pa)",
         "Undrained shear strength c_u given directly (uniform with depth) to model.longterm; "
-        "None uses the ratio to σ′_v0 above.",
+        "None uses the ratio to σ′_v0 above. Bounds: any positive strength.",
         (False, True),
         allow_none=True,
     )
@@ -1208,6 +1218,13 @@ class Scenario(param.Parameterized):
                 f"of the ring radius a = {tunnel.ring_radius:g} m (h/a = "
                 f"{tunnel.thickness / tunnel.ring_radius:.3g}): the thin-ring lining model does "
                 f"not hold; allowed h ≤ {THIN_RING_MAX_RATIO:g} a"
+            )
+        cover = self.longterm.axis_depth - tunnel.inner_radius - tunnel.thickness
+        if cover <= 0.0:
+            problems.append(
+                f"longterm.axis_depth = {self.longterm.axis_depth:g} m puts the lining (outer "
+                f"radius {tunnel.inner_radius + tunnel.thickness:g} m) above the ground surface; "
+                "allowed: axis depth > tunnel.inner_radius + tunnel.thickness"
             )
         profile = irr.profile_csv
         if irr.enabled and profile and not Path(profile).is_file():

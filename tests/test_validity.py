@@ -91,6 +91,13 @@ def test_2_a_thick_lining_breaks_the_thin_ring_model():
         scenario.validate()
 
 
+def test_2_a_tunnel_above_the_ground_surface_is_refused():
+    scenario = Scenario.paper()
+    scenario.longterm.axis_depth = 2.0
+    with pytest.raises(ScenarioError, match=r"longterm\.axis_depth = 2 m .*above the ground"):
+        scenario.validate()
+
+
 def test_2_a_record_too_short_for_the_deep_response_is_refused(cheap_scenario):
     """Soft undamped soil at 400 km/h: the default padding wrapped the deep response, which
     then grew with depth (0.28 → 0.32 mm from 28 to 35 m, the true values being 0.75 → 0.61).
@@ -361,3 +368,28 @@ def test_10_the_command_line_names_a_bad_scenario_file(tmp_path, capsys):
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert str(path) in err and "Traceback" not in err
+
+
+# ---- the validity table stays in step with the parameters -----------------------------------
+def test_docs_table_lists_every_bound_as_declared():
+    """docs/validity.md has one 'bound' row per bounded number, with the declared range."""
+    from pathlib import Path
+
+    from model.params import SECTIONS, Count, Quantity, _format_range
+
+    text = (Path(__file__).resolve().parent.parent / "docs" / "validity.md").read_text()
+    rows = {
+        cells[1].strip("` "): cells[3].strip()
+        for line in text.splitlines()
+        if line.startswith("| `") and (cells := line.split("|"))[2].strip() == "bound"
+    }
+    scenario = Scenario()
+    declared = {
+        f"{section}.{name}": _format_range(p.bounds, p.inclusive_bounds)
+        for section in SECTIONS
+        for name, p in getattr(scenario, section).param.objects("existing").items()
+        if isinstance(p, Quantity | Count)
+    }
+    assert set(rows) == set(declared)
+    for path, interval in declared.items():
+        assert rows[path].startswith(interval), path
