@@ -1,7 +1,7 @@
 """Parameter objects of the vehicle–track–tunnel–soil model.
 
 The single source of truth for defaults, physical bounds, slider ranges (``softbounds``), units
-(in each ``label``) and derived quantities. Defaults follow ``shared/MODEL.md``: the paper's
+(in each ``label``) and derived quantities. Defaults follow docs/model.md: the paper's
 Tables 1, 3 and 4 where they are usable, stated assumptions where the paper is silent (its
 Table 2 is missing). Every value is SI except ``Train.speed_kmh``.
 
@@ -201,7 +201,7 @@ class Vehicle(param.Parameterized):
 
 
 class Train(param.Parameterized):
-    """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A train (MODEL.md §1).
+    """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A (docs/model.md §1).
 
     Used by ``Train.axle_offsets`` (wheel positions in model.vehicle_track) and
     ``Scenario.passage_duration``.
@@ -297,7 +297,7 @@ class Train(param.Parameterized):
 class Track(param.Parameterized):
     """Elastic supporting-block ballastless track, one rail.
 
-    The paper's Table 2 is missing; defaults are typical Chinese-metro values (MODEL.md §2):
+    The paper's Table 2 is missing; defaults are typical Chinese-metro values (docs/model.md §2):
     60 kg/m rail, 0.6 m block spacing. Used by ``model.vehicle_track._track_system`` and
     ``stable_time_step``; the Winkler values by ``winkler_block_displacement``.
     """
@@ -585,7 +585,7 @@ class Soil(param.Parameterized):
 
     Primary inputs are E, ν, ρ and the loss factors; wave speeds and Lamé constants are derived.
     The default E = 6 MPa, ν = 0.3 is the only reading of the self-inconsistent Table 4 that
-    reproduces the paper's millimetre magnitudes (MODEL.md §7); the others are presets. Used by
+    reproduces the paper's millimetre magnitudes (docs/model.md §7); the others are presets. Used by
     ``model.tunnel_soil._soil_constants`` (μ*, λ*, ρ) and, for the record tail,
     ``model.settlement.soil_response``.
     """
@@ -786,7 +786,7 @@ class Numerics(param.Parameterized):
     )
 
 
-# Li & Selig (1996) parameter sets (a in %, b, m) by soil class (MODEL.md §10).
+# Li & Selig (1996) parameter sets (a in %, b, m) by soil class (docs/model.md §10).
 LI_SELIG_SOIL_CLASSES = {
     "ML": (0.64, 0.10, 1.7),
     "MH": (0.84, 0.13, 2.0),
@@ -796,7 +796,7 @@ LI_SELIG_SOIL_CLASSES = {
 
 
 class LongTerm(param.Parameterized):
-    """Permanent settlement accumulated over years of traffic (MODEL.md §10).
+    """Permanent settlement accumulated over years of traffic (docs/model.md §10).
 
     Static stress state of the ground around the tunnel, traffic, and the empirical cyclic
     strain-accumulation law ε_p(q_d, N) (ε_p in %, stresses in the law as ratios). Every
@@ -995,7 +995,7 @@ class Scenario(param.Parameterized):
 
     @classmethod
     def paper(cls) -> Scenario:
-        """The paper's Nanjing case as read by MODEL.md: Type A six cars, 80 km/h, FRA 6."""
+        """The paper's Nanjing case as read by docs/model.md: Type A six cars, 80 km/h, FRA 6."""
         return cls.preset("paper")
 
     @classmethod
@@ -1174,7 +1174,7 @@ class Scenario(param.Parameterized):
 
     @property
     def rail_modes(self) -> int:
-        """Number of rail modes used: the given value, or L/L_s (MODEL.md §2)."""
+        """Number of rail modes used: the given value, or L/L_s (docs/model.md §2)."""
         if self.numerics.n_rail_modes is not None:
             return self.numerics.n_rail_modes
         return round(self.rail_length / self.track.block_spacing)
