@@ -304,6 +304,25 @@ def test_9_the_message_names_the_parameter_at_fault(path, value):
     assert "numerics.dt" not in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("path", "value", "named"),
+    [
+        ("track.fastener_stiffness", "1e10", "track.fastener_stiffness"),
+        ("track.pad_damping", "1e6", "track.pad_damping"),
+        ("numerics.n_rail_modes", "20000", "numerics.n_rail_modes"),
+    ],
+)
+def test_9_the_stability_refusal_names_the_part_that_sets_the_limit(path, value, named):
+    """It used to name the rail modes whatever set the limit (a stiff pad, a damper...)."""
+    from model.vehicle_track import check_inputs
+
+    scenario = Scenario.preset("single_bogie")
+    scenario.set_value(path, value)
+    with pytest.raises(ValueError, match=r"numerics\.dt = .* stability limit") as info:
+        check_inputs(scenario)
+    assert named in str(info.value)
+
+
 def test_9_a_non_finite_soil_solution_names_the_inputs():
     """The kernel's last guard used to say only "check the inputs"."""
     scenario = Scenario.paper()
