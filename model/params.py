@@ -686,7 +686,7 @@ class Soil(param.Parameterized):
 class Numerics(param.Parameterized):
     """Discretisation and output settings of every stage.
 
-    Besides these bounds, ``model.pipeline.estimate_run`` refuses a run whose arrays would not
+    Besides these bounds, ``model.run_cost.estimate_run`` refuses a run whose arrays would not
     fit in memory and warns of one estimated to take long, naming the parameter to change.
     """
 
