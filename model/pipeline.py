@@ -18,7 +18,7 @@ import time
 import warnings
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -237,7 +237,7 @@ def run(
             cached.append(name)
             seconds[name] = 0.0
             report(name, 1.0)
-            return value
+            return _handed_out(value)
         report(name, 0.0)
         start = time.perf_counter()
         value = _read_only(compute())
@@ -245,7 +245,7 @@ def run(
         report(name, 1.0)
         if cache is not None:
             cache.put(name, keys[name], value)
-        return value
+        return _handed_out(value)
 
     vt = stage(
         "vehicle_track", lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f))
@@ -283,6 +283,18 @@ def _read_only(stage_result):
         if isinstance(value, np.ndarray):
             value.flags.writeable = False
     return stage_result
+
+
+def _handed_out(stage_result):
+    """A shallow copy of a stage result with its lists copied, so that rebinding a field or
+    appending to a list of the caller's results cannot change what a cache serves later (the
+    arrays are shared, read-only)."""
+    lists = {
+        item.name: list(getattr(stage_result, item.name))
+        for item in fields(stage_result)
+        if isinstance(getattr(stage_result, item.name), list)
+    }
+    return replace(stage_result, **lists)
 
 
 def invariant_warnings(soil: SoilResponse) -> list[str]:

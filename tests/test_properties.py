@@ -63,10 +63,11 @@ def drawable_parameters() -> dict[str, param.Parameter]:
 
 
 PARAMETERS = drawable_parameters()
-NAMES = {path.split(".")[1] for path in [*PARAMETERS, *CHOICES]} | {"profile_csv"}
+# A refusal may name any parameter of any section (a later stage may refuse too).
+NAMES = {name for section in SECTIONS for name in getattr(Scenario(), section).param} - {"name"}
 NAMED = re.compile(
-    r"\b(?:" + "|".join(PIPELINE_SECTIONS) + r"|Vehicle|Train|Track|Irregularity|Tunnel|Soil|"
-    r"Numerics)\.(" + "|".join(sorted(NAMES)) + r")\b",
+    r"\b(?:" + "|".join(SECTIONS) + r"|Vehicle|Train|Track|Irregularity|Tunnel|Soil|Numerics|"
+    r"LongTerm)\.(" + "|".join(sorted(NAMES)) + r")\b",
     re.IGNORECASE,
 )
 
