@@ -1,7 +1,7 @@
 """Parameter objects of the vehicle–track–tunnel–soil model.
 
 The single source of truth for defaults, physical bounds, slider ranges (``softbounds``), units
-(in each ``label``) and derived quantities. Defaults follow ``shared/MODEL.md``: the paper's
+(in each ``label``) and derived quantities. Defaults follow docs/model.md: the paper's
 Tables 1, 3 and 4 where they are usable, stated assumptions where the paper is silent (its
 Table 2 is missing). Every value is SI except ``Train.speed_kmh``.
 
@@ -201,7 +201,7 @@ class Vehicle(param.Parameterized):
 
 
 class Train(param.Parameterized):
-    """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A train (MODEL.md §1).
+    """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A (docs/model.md §1).
 
     Used by ``Train.axle_offsets`` (wheel positions in model.vehicle_track) and
     ``Scenario.passage_duration``.
@@ -297,7 +297,7 @@ class Train(param.Parameterized):
 class Track(param.Parameterized):
     """Elastic supporting-block ballastless track, one rail.
 
-    The paper's Table 2 is missing; defaults are typical Chinese-metro values (MODEL.md §2):
+    The paper's Table 2 is missing; defaults are typical Chinese-metro values (docs/model.md §2):
     60 kg/m rail, 0.6 m block spacing. Used by ``model.vehicle_track._track_system`` and
     ``stable_time_step``; the Winkler values by ``winkler_block_displacement``.
     """
@@ -585,7 +585,7 @@ class Soil(param.Parameterized):
 
     Primary inputs are E, ν, ρ and the loss factors; wave speeds and Lamé constants are derived.
     The default E = 6 MPa, ν = 0.3 is the only reading of the self-inconsistent Table 4 that
-    reproduces the paper's millimetre magnitudes (MODEL.md §7); the others are presets. Used by
+    reproduces the paper's millimetre magnitudes (docs/model.md §7); the others are presets. Used by
     ``model.tunnel_soil._soil_constants`` (μ*, λ*, ρ) and, for the record tail,
     ``model.settlement.soil_response``.
     """
@@ -686,7 +686,7 @@ class Soil(param.Parameterized):
 class Numerics(param.Parameterized):
     """Discretisation and output settings of every stage.
 
-    Besides these bounds, ``model.pipeline.estimate_run`` refuses a run whose arrays would not
+    Besides these bounds, ``model.run_cost.estimate_run`` refuses a run whose arrays would not
     fit in memory and warns of one estimated to take long, naming the parameter to change.
     """
 
@@ -795,12 +795,13 @@ class Numerics(param.Parameterized):
     )
     max_wavenumber = _q(
         20.0,
-        (0, None),
+        (0, 1000),
         (5.0, 100.0),
         "Largest wavenumber (rad/m)",
         "Upper limit ξ_max of the wavenumber integral of the 2.5D point-load response "
         "(model.tunnel_soil_3d.point_load_response); the tail beyond is estimated and must be "
-        "below the wavenumber tolerance.",
+        "below the wavenumber tolerance. Bounds up to 1000 rad/m: wavelengths down to 6 mm, "
+        "far below the lining thickness where the thin-shell model ends.",
         (False, True),
     )
     wavenumber_tolerance = _q(
@@ -816,7 +817,7 @@ class Numerics(param.Parameterized):
     )
 
 
-# Li & Selig (1996) parameter sets (a in %, b, m) by soil class (MODEL.md §10).
+# Li & Selig (1996) parameter sets (a in %, b, m) by soil class (docs/model.md §10).
 LI_SELIG_SOIL_CLASSES = {
     "ML": (0.64, 0.10, 1.7),
     "MH": (0.84, 0.13, 2.0),
@@ -826,7 +827,7 @@ LI_SELIG_SOIL_CLASSES = {
 
 
 class LongTerm(param.Parameterized):
-    """Permanent settlement accumulated over years of traffic (MODEL.md §10).
+    """Permanent settlement accumulated over years of traffic (docs/model.md §10).
 
     Static stress state of the ground around the tunnel, traffic, and the empirical cyclic
     strain-accumulation law ε_p(q_d, N) (ε_p in %, stresses in the law as ratios). Every
@@ -855,7 +856,8 @@ class LongTerm(param.Parameterized):
         (0.1, 5.0),
         "Law coefficient a (%)",
         "Coefficient a (or A of Monismith) of the strain law, ε_p in %; used (via "
-        "LongTerm.law_parameters) when the soil class is 'user' or the law is not Li & Selig.",
+        "LongTerm.law_parameters) when the soil class is 'user' or the law is not Li & Selig. "
+        "Bounds (0, 100] %: a strain beyond 100 % is failure, not accumulation.",
         (False, True),
     )
     b = _q(
@@ -864,7 +866,8 @@ class LongTerm(param.Parameterized):
         (0.05, 0.4),
         "Cycle exponent b (-)",
         "Exponent b of N in the strain law; used (via LongTerm.law_parameters) when the soil "
-        "class is 'user' or the law is not Li & Selig.",
+        "class is 'user' or the law is not Li & Selig. Bounds (0, 1): the strain grows with N, "
+        "but slower than linearly (published fits 0.1–0.3).",
         (False, False),
     )
     m = _q(
@@ -873,7 +876,8 @@ class LongTerm(param.Parameterized):
         (1.0, 4.0),
         "Stress exponent m (-)",
         "Exponent m of the stress ratio in the strain law; used (via LongTerm.law_parameters) "
-        "when the soil class is 'user' or the law is not Li & Selig.",
+        "when the soil class is 'user' or the law is not Li & Selig. Bounds (0, 10]: published "
+        "fits 1–4.",
         (False, True),
     )
     n = _q(
@@ -881,7 +885,8 @@ class LongTerm(param.Parameterized):
         (0, 10),
         (0.0, 3.0),
         "Static-stress exponent n (-)",
-        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law in model.longterm (default 1.0).",
+        "Exponent n of (1 + q_s/q_f) in Chai & Miura's law in model.longterm (default 1.0). "
+        "Bounds [0, 10]: published fits 0–3.",
     )
     trains_per_day = _q(
         200.0,
@@ -889,7 +894,8 @@ class LongTerm(param.Parameterized):
         (10.0, 600.0),
         "Trains per day (-)",
         "Passages of the train over the section per day, both directions, n_d; with the cycles "
-        "per train it gives N(t) in model.longterm.",
+        "per train it gives N(t) in model.longterm. Bounds (0, 5000]: more is a train every 20 s "
+        "around the clock.",
         (False, True),
     )
     years = _q(
@@ -898,7 +904,8 @@ class LongTerm(param.Parameterized):
         (1.0, 100.0),
         "Years of service (yr)",
         "Service time t at which model.longterm reports the final settlement; the "
-        "settlement-time curve runs from one day of traffic to this time.",
+        "settlement-time curve runs from one day of traffic to this time. Bounds (0, 200] yr: "
+        "design lives are 100 yr.",
         (False, True),
     )
     cycles_per_train = param.Selector(
@@ -914,7 +921,8 @@ class LongTerm(param.Parameterized):
         (8.0, 40.0),
         "Tunnel axis depth (m)",
         "Depth of the tunnel axis below the ground surface, H_t, for the static stress state in "
-        "model.longterm; the paper gives none, 15 m is assumed.",
+        "model.longterm; the paper gives none, 15 m is assumed. Bounds (0, 200] m; "
+        "Scenario.validate requires the lining below the ground surface.",
         (False, True),
     )
     water_table_depth = _q(
@@ -923,7 +931,8 @@ class LongTerm(param.Parameterized):
         (0.0, 10.0),
         "Water table depth (m)",
         "Depth of the water table below the ground surface, z_w, for σ′_v0 in model.longterm "
-        "(soil above it is taken as dry at the same density).",
+        "(soil above it is taken as dry at the same density). Bounds [0, 200] m (0: at the "
+        "surface).",
     )
     friction_angle = _q(
         25.0,
@@ -931,7 +940,8 @@ class LongTerm(param.Parameterized):
         (15.0, 40.0),
         "Effective friction angle φ′ (°)",
         "Effective friction angle φ′; sets K0 = 1 − sin φ′ (Jaky, "
-        "LongTerm.earth_pressure_coefficient) for the static stress state in model.longterm.",
+        "LongTerm.earth_pressure_coefficient) for the static stress state in model.longterm. "
+        "Bounds (0, 60]°: soils have 15–45°.",
         (False, True),
     )
     cu_ratio = _q(
@@ -940,7 +950,8 @@ class LongTerm(param.Parameterized):
         (0.1, 0.5),
         "Undrained strength ratio c_u/σ′_v0 (-)",
         "Undrained shear strength as a ratio to the vertical effective stress (normally "
-        "consolidated clay); the static strength in model.longterm is σ_s = q_f = 2c_u.",
+        "consolidated clay); the static strength in model.longterm is σ_s = q_f = 2c_u. Bounds "
+        "(0, 2]: normally consolidated clays 0.2–0.3, heavily overconsolidated ones up to ~1.",
         (False, True),
     )
     undrained_strength = _q(
@@ -949,7 +960,7 @@ class LongTerm(param.Parameterized):
         (10e3, 200e3),
         "Undrained shear strength c_u (Pa)",
         "Undrained shear strength c_u given directly (uniform with depth) to model.longterm; "
-        "None uses the ratio to σ′_v0 above.",
+        "None uses the ratio to σ′_v0 above. Bounds: any positive strength.",
         (False, True),
         allow_none=True,
     )
@@ -1015,7 +1026,7 @@ class Scenario(param.Parameterized):
 
     @classmethod
     def paper(cls) -> Scenario:
-        """The paper's Nanjing case as read by MODEL.md: Type A six cars, 80 km/h, FRA 6."""
+        """The paper's Nanjing case as read by docs/model.md: Type A six cars, 80 km/h, FRA 6."""
         return cls.preset("paper")
 
     @classmethod
@@ -1194,7 +1205,7 @@ class Scenario(param.Parameterized):
 
     @property
     def rail_modes(self) -> int:
-        """Number of rail modes used: the given value, or L/L_s (MODEL.md §2)."""
+        """Number of rail modes used: the given value, or L/L_s (docs/model.md §2)."""
         if self.numerics.n_rail_modes is not None:
             return self.numerics.n_rail_modes
         return round(self.rail_length / self.track.block_spacing)
@@ -1238,6 +1249,13 @@ class Scenario(param.Parameterized):
                 f"of the ring radius a = {tunnel.ring_radius:g} m (h/a = "
                 f"{tunnel.thickness / tunnel.ring_radius:.3g}): the thin-ring lining model does "
                 f"not hold; allowed h ≤ {THIN_RING_MAX_RATIO:g} a"
+            )
+        cover = self.longterm.axis_depth - tunnel.inner_radius - tunnel.thickness
+        if cover <= 0.0:
+            problems.append(
+                f"longterm.axis_depth = {self.longterm.axis_depth:g} m puts the lining (outer "
+                f"radius {tunnel.inner_radius + tunnel.thickness:g} m) above the ground surface; "
+                "allowed: axis depth > tunnel.inner_radius + tunnel.thickness"
             )
         profile = irr.profile_csv
         if irr.enabled and profile and not Path(profile).is_file():

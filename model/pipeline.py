@@ -328,7 +328,7 @@ def _read_only(stage_result):
 
 
 def invariant_warnings(soil: SoilResponse) -> list[str]:
-    """Flags for results that break the elastic model's invariants (MODEL.md §8).
+    """Flags for results that break the elastic model's invariants (docs/model.md §8).
 
     Under a downward load the peak downward displacement is positive and does not grow with
     depth; a violation beyond ``INVARIANT_TOLERANCE`` of the invert peak means the inputs are

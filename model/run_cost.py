@@ -12,10 +12,12 @@ prices the work with a cost model fitted to the project's benchmarks:
   stage (5330 frequencies × 71 depths × 33 harmonics, docs/tunnel_soil.md), about half of it
   in the two K₀/K₁ evaluations per frequency and depth, which cost as much as 16 harmonics.
 
-These figures are best-of timings on the 2-core development machine with other jobs running;
-the estimate is good to a factor of about two (``benchmarks/bench_run_cost.py`` prints it next
-to measured runs). It is used to refuse a run that cannot fit in memory and to warn before one
-that is estimated to take more than ``SLOW_RUN_SECONDS``.
+These figures are best-of timings on the 2-core development machine at a quiet moment; other
+processes slow a run down in proportion, so the times are multiplied by
+:func:`machine_load_factor`, max(1, load average / cores). ``benchmarks/bench_run_cost.py``
+prints the estimate next to measured runs (docs/validity.md). The estimate is used to refuse a
+run that cannot fit in memory and to warn before one that would take more than
+``SLOW_RUN_SECONDS``.
 """
 
 from __future__ import annotations
@@ -78,6 +80,14 @@ class RunEstimate:
             f"this run is estimated to take about {self.total_seconds:.0f} s "
             f"({stage} stage {self.seconds[stage]:.0f} s; driven by {self.blame[stage]})"
         )
+
+
+def machine_load_factor() -> float:
+    """Slow-down from other processes: max(1, one-minute load average / CPU count)."""
+    try:
+        return max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
+    except (OSError, AttributeError):
+        return 1.0
 
 
 def available_memory_bytes() -> float:
@@ -151,12 +161,13 @@ def estimate_run(scenario: Scenario, available_bytes: float | None = None) -> Ru
         + (COMPLEX_BYTES / 2 + FLOAT_BYTES) * depths * n_out_pad  # one inverse FFT
     )
     soil_seconds = SOIL_SECONDS * n_freq * depths * (numerics.n_harmonics + BESSEL_HARMONICS)
+    load = machine_load_factor()
     estimate = RunEstimate(
         memory_bytes={"vehicle_track": vt_memory, "soil": soil_memory, "stress": stress_memory},
         seconds={
-            "vehicle_track": n_steps * step_seconds + synthesis,
-            "soil": soil_seconds,
-            "stress": STRESS_TIME_RATIO * soil_seconds,
+            "vehicle_track": load * (n_steps * step_seconds + synthesis),
+            "soil": load * soil_seconds,
+            "stress": load * STRESS_TIME_RATIO * soil_seconds,
         },
         blame={
             "vehicle_track": (

@@ -783,6 +783,36 @@ def stable_time_step(scenario: Scenario) -> float:
     return STABILITY_SAFETY * zhai_damped_limit(math.sqrt(omega2), gamma)
 
 
+def _stiffest_part(scenario: Scenario) -> str:
+    """The part of the model with the highest rate (ω, or damping γ), naming its parameters."""
+    track, vehicle = scenario.track, assemble_vehicle(scenario)
+    scale = np.sqrt(vehicle.inv_mass[0])
+    wheel_mass = 0.5 * scenario.vehicle.wheelset_mass
+    hertz = 1.5 * (HERTZ_OVERLOAD * scenario.vehicle.static_wheel_load) ** (1.0 / 3.0)
+    rates_squared = {
+        f"the highest of {scenario.rail_modes} rail modes (numerics.n_rail_modes, track.rail_E, "
+        "track.rail_I, track.rail_mass)": assemble_track(scenario).omega2[-1],
+        "the block on its fastener and pad (track.fastener_stiffness, track.pad_stiffness, "
+        "track.block_mass)": (track.fastener_stiffness + track.pad_stiffness) / track.block_mass,
+        "the block's damping (track.fastener_damping, track.pad_damping, track.block_mass)": (
+            (track.fastener_damping + track.pad_damping) / track.block_mass
+        )
+        ** 2,
+        "the vehicle's suspension (vehicle.*_stiffness, vehicle.*_mass)": np.linalg.eigvalsh(
+            scale[:, None] * vehicle.stiffness[0] * scale
+        ).max(),
+        "the vehicle's dampers (vehicle.*_damping, vehicle.*_mass)": np.linalg.eigvalsh(
+            scale[:, None] * vehicle.damping[0] * scale
+        ).max()
+        ** 2,
+        "the wheel–rail contact (vehicle.wheelset_mass, track.wheel_radius)": hertz
+        / track.hertz_constant
+        / wheel_mass,
+    }
+    part = max(rates_squared, key=rates_squared.get)
+    return f"{part}, rate ≈ {math.sqrt(rates_squared[part]):.4g} 1/s"
+
+
 def n_time_steps(scenario: Scenario) -> int:
     """Time steps covering the passage at ``numerics.dt``.
 
@@ -826,9 +856,8 @@ def check_inputs(scenario: Scenario) -> float:
     if numerics.dt > limit:
         raise ValueError(
             f"numerics.dt = {numerics.dt:g} s is above the explicit stability limit of this "
-            f"scenario ({scenario.rail_modes} rail modes, highest ω ≈ "
-            f"{math.sqrt(assemble_track(scenario).omega2[-1]):.4g} rad/s); allowed range "
-            f"(0, {limit:.4g}] s: lower the time step or the number of rail modes"
+            f"scenario, set by {_stiffest_part(scenario)}; allowed range (0, {limit:.4g}] s: "
+            "lower the time step or change the parameters of that part"
         )
     n_channels = 3 + 2 * train.n_wheels + (1 if train.single_bogie else train.n_cars)
     n_values = (n_time_steps(scenario) + 1) * n_channels

@@ -63,10 +63,11 @@ def drawable_parameters() -> dict[str, param.Parameter]:
 
 
 PARAMETERS = drawable_parameters()
-NAMES = {path.split(".")[1] for path in [*PARAMETERS, *CHOICES]} | {"profile_csv"}
+# A refusal may name any parameter of any section (a later stage may refuse too).
+NAMES = {name for section in SECTIONS for name in getattr(Scenario(), section).param} - {"name"}
 NAMED = re.compile(
-    r"\b(?:" + "|".join(PIPELINE_SECTIONS) + r"|Vehicle|Train|Track|Irregularity|Tunnel|Soil|"
-    r"Numerics)\.(" + "|".join(sorted(NAMES)) + r")\b",
+    r"\b(?:" + "|".join(SECTIONS) + r"|Vehicle|Train|Track|Irregularity|Tunnel|Soil|Numerics|"
+    r"LongTerm)\.(" + "|".join(sorted(NAMES)) + r")\b",
     re.IGNORECASE,
 )
 
@@ -101,9 +102,11 @@ def values_within_bounds(parameter: param.Parameter) -> st.SearchStrategy:
 
 
 @st.composite
-def scenarios(draw) -> tuple[Scenario, dict]:
-    """The base scenario with one to three parameters drawn across their bounds."""
-    paths = draw(st.lists(st.sampled_from(sorted(PARAMETERS)), min_size=1, max_size=3, unique=True))
+def scenarios(draw, max_changed: int = 3) -> tuple[Scenario, dict]:
+    """The base scenario with 1 to ``max_changed`` parameters drawn across their bounds."""
+    paths = draw(
+        st.lists(st.sampled_from(sorted(PARAMETERS)), min_size=1, max_size=max_changed, unique=True)
+    )
     changes = {path: draw(values_within_bounds(PARAMETERS[path])) for path in paths}
     for path in draw(st.lists(st.sampled_from(CHOICES), max_size=1)):
         section, name = path.split(".")
@@ -117,8 +120,9 @@ def scenarios(draw) -> tuple[Scenario, dict]:
     return scenario, changes
 
 
-def check_property(scenario: Scenario, budget_s: float | None = RUN_BUDGET_S) -> str:
-    """Run the property on one scenario; return the outcome ("ok", "refused", "too slow").
+def check_property(scenario: Scenario, budget_s: float | None = RUN_BUDGET_S) -> tuple[str, str]:
+    """Run the property on one scenario: the outcome ("ok", "refused", "too slow") and, for a
+    refusal, the parameter it names.
 
     Raises AssertionError if the outcome is neither sound results nor a clear refusal.
     """
@@ -127,13 +131,14 @@ def check_property(scenario: Scenario, budget_s: float | None = RUN_BUDGET_S) ->
         estimate = estimate_run(scenario)
         if budget_s is not None and estimate.total_seconds > budget_s:
             check_inputs(scenario)
-            return "too slow"
+            return "too slow", ""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SlowRunWarning)
             results = run(scenario)
     except (ValueError, SimulationError) as error:
-        assert NAMED.search(str(error)), f"refusal names no parameter: {error}"
-        return "refused"
+        named = NAMED.search(str(error))
+        assert named, f"refusal names no parameter: {error}"
+        return "refused", named.group(0)
     soil, load = results.soil, results.load
     for name, array in [
         ("peak_disp_m", soil.peak_disp_m),
@@ -149,12 +154,12 @@ def check_property(scenario: Scenario, budget_s: float | None = RUN_BUDGET_S) ->
     assert rise <= INVARIANT_TOLERANCE * peak[0], f"peak grows with depth by {rise:g} m"
     assert np.all(load.psd >= 0.0) and np.all(soil.interface_psd >= 0.0)
     assert not any("assumptions are broken" in text for text in results.warnings)
-    return "ok"
+    return "ok", ""
 
 
 @settings(
     max_examples=40,
-    deadline=timedelta(seconds=20),
+    deadline=timedelta(seconds=30),
     derandomize=True,
     database=None,
     suppress_health_check=[HealthCheck.too_slow],
@@ -164,4 +169,4 @@ def test_scenarios_within_bounds_give_sound_results_or_clear_refusals(drawn):
     """Tolerances: INVARIANT_TOLERANCE (1e-6 of the invert peak) on the growth with depth, the
     pipeline flag's own; every other check is exact (finite, > 0, ≥ 0)."""
     scenario, changes = drawn
-    event(check_property(scenario))
+    event(check_property(scenario)[0])

@@ -58,6 +58,27 @@ def test_1_a_caller_cannot_change_what_the_cache_serves(cheap_scenario):
         assert writable == []
 
 
+def test_1_results_cannot_be_changed_behind_the_cache(cheap_scenario):
+    """Arrays are read-only and stage results frozen: converting a field to kN in place, or
+    rebinding it, raises instead of changing what the cache serves to the next run; warnings
+    are tuples."""
+    scenario, cache = cheap_scenario(), StageCache()
+    first = run(scenario, cache=cache)
+    expected = first.vehicle_track.block_force_N.copy()
+    with pytest.raises(ValueError, match="read-only"):
+        first.soil.peak_disp_m *= 1e3
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        first.vehicle_track.block_force_N = first.vehicle_track.block_force_N / 1e3
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        first.load.line_load_N_per_m = first.load.line_load_N_per_m / 1e3
+    assert isinstance(first.vehicle_track.warnings, tuple)
+    assert isinstance(first.longterm.warnings, tuple)
+    again = run(scenario, cache=cache)
+    assert again.cached_stages == pipeline.STAGES
+    np.testing.assert_array_equal(again.vehicle_track.block_force_N, expected)
+    assert again.load.line_load_N_per_m.max() > 1e3  # N/m, not kN/m
+
+
 def test_1_run_caches_only_when_given_a_cache(cheap_scenario):
     assert inspect.signature(run).parameters["cache"].default is None
     assert not hasattr(pipeline, "DEFAULT_CACHE")
@@ -88,6 +109,13 @@ def test_2_a_thick_lining_breaks_the_thin_ring_model():
     scenario.tunnel.inner_radius = 1.0
     scenario.tunnel.thickness = 1.0
     with pytest.raises(ScenarioError, match=r"tunnel\.thickness = 1 m .*h/a = 0\.667"):
+        scenario.validate()
+
+
+def test_2_a_tunnel_above_the_ground_surface_is_refused():
+    scenario = Scenario.paper()
+    scenario.longterm.axis_depth = 2.0
+    with pytest.raises(ScenarioError, match=r"longterm\.axis_depth = 2 m .*above the ground"):
         scenario.validate()
 
 
@@ -300,6 +328,25 @@ def test_9_the_message_names_the_parameter_at_fault(path, value):
     assert "numerics.dt" not in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("path", "value", "named"),
+    [
+        ("track.fastener_stiffness", "1e10", "track.fastener_stiffness"),
+        ("track.pad_damping", "1e6", "track.pad_damping"),
+        ("numerics.n_rail_modes", "20000", "numerics.n_rail_modes"),
+    ],
+)
+def test_9_the_stability_refusal_names_the_part_that_sets_the_limit(path, value, named):
+    """It used to name the rail modes whatever set the limit (a stiff pad, a damper...)."""
+    from model.vehicle_track import check_inputs
+
+    scenario = Scenario.preset("single_bogie")
+    scenario.set_value(path, value)
+    with pytest.raises(ValueError, match=r"numerics\.dt = .* stability limit") as info:
+        check_inputs(scenario)
+    assert named in str(info.value)
+
+
 def test_9_a_non_finite_soil_solution_names_the_inputs():
     """The kernel's last guard used to say only "check the inputs"."""
     scenario = Scenario.paper()
@@ -364,3 +411,28 @@ def test_10_the_command_line_names_a_bad_scenario_file(tmp_path, capsys):
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert str(path) in err and "Traceback" not in err
+
+
+# ---- the validity table stays in step with the parameters -----------------------------------
+def test_docs_table_lists_every_bound_as_declared():
+    """docs/validity.md has one 'bound' row per bounded number, with the declared range."""
+    from pathlib import Path
+
+    from model.params import SECTIONS, Count, Quantity, _format_range
+
+    text = (Path(__file__).resolve().parent.parent / "docs" / "validity.md").read_text()
+    rows = {
+        cells[1].strip("` "): cells[3].strip()
+        for line in text.splitlines()
+        if line.startswith("| `") and (cells := line.split("|"))[2].strip() == "bound"
+    }
+    scenario = Scenario()
+    declared = {
+        f"{section}.{name}": _format_range(p.bounds, p.inclusive_bounds)
+        for section in SECTIONS
+        for name, p in getattr(scenario, section).param.objects("existing").items()
+        if isinstance(p, Quantity | Count)
+    }
+    assert set(rows) == set(declared)
+    for path, interval in declared.items():
+        assert rows[path].startswith(interval), path
