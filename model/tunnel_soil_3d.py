@@ -494,13 +494,43 @@ def invert_stress_2p5d(
     StressField
         Complex (n, n_depth) stresses in Pa per N/m, tension positive, at θ = 0, x = 0.
     """
+    return invert_response_2p5d(freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics)[
+        1
+    ]
+
+
+def invert_response_2p5d(
+    freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics: int
+) -> tuple[np.ndarray, StressField]:
+    """Receptance and stresses below the invert from one kernel evaluation.
+
+    The per-(n, ξ, ω) shell–soil solve is shared: the receptance equals
+    :func:`receptance_2p5d`'s and the stresses :func:`invert_stress_2p5d`'s, at the cost of
+    one evaluation.
+
+    Parameters
+    ----------
+    freq_hz, wavenumber_rad_per_m : float or array_like
+        Paired frequencies (Hz, > 0) and wavenumbers (rad/m), as in :func:`receptance_2p5d`.
+    depth_m : float or array_like
+        Depths d ≥ 0 below the ring–soil interface (m).
+    tunnel, soil : model.params.Tunnel, model.params.Soil
+        Lining and soil.
+    n_harmonics : int
+        Highest circumferential harmonic N ≥ 0.
+
+    Returns
+    -------
+    (ndarray, StressField)
+        Complex (n, n_depth) receptance in m per N/m and stresses in Pa per N/m.
+    """
     omega, xi = _paired_inputs(freq_hz, wavenumber_rad_per_m)
     depth = _depths(depth_m)
-    _, s_rr, s_tt, s_xx, s_rx = _run_kernel(
+    u_r, s_rr, s_tt, s_xx, s_rx = _run_kernel(
         omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True
     )
     zero = np.zeros_like(s_rr)
-    return StressField(
+    return u_r, StressField(
         sigma_rr=s_rr,
         sigma_thetatheta=s_tt,
         sigma_xx=s_xx,
