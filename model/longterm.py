@@ -226,7 +226,7 @@ def deviator_stress(
 
 @dataclass(frozen=True)
 class StressResponse:
-    """Stress stage result: the dynamic deviator under the invert during one passage."""
+    """The dynamic deviator under the invert during one passage (from the soil stage)."""
 
     depth_m: np.ndarray
     """(nd,) depths below the ring–soil interface (m), as in the soil stage."""
@@ -611,7 +611,7 @@ def long_term_settlement(stress: StressResponse, scenario) -> LongTermResult:
     Parameters
     ----------
     stress : StressResponse
-        Deviator under the invert per passage (the stress stage).
+        Deviator under the invert per passage (computed with the soil stage, Results.stress).
     scenario : model.params.Scenario
         Uses longterm, tunnel.ring_radius, soil.density and train (number of bogies).
 
