@@ -1,9 +1,10 @@
-"""Time the stress and long-term stages on the paper case (MODEL.md §10).
+"""Time the long-term stage and the stresses of the soil stage on the paper case (MODEL.md §10).
 
 Run: ``python benchmarks/bench_longterm.py``. Prints best-of-N wall times with warm Numba
 caches: the long-term stage alone (target ≤ 0.1 s), a pipeline re-run after a change of the
-long-term inputs only (every other stage served from the cache), and the stress stage, which
-re-runs with the soil stage.
+long-term inputs only (every other stage served from the cache), and the soil stage with and
+without the stresses (the pipeline's soil stage, ``section_response``, computes both from one
+kernel pass; ``soil_response`` the displacements alone).
 """
 
 from __future__ import annotations
@@ -14,9 +15,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from model.longterm import long_term_settlement, stress_response  # noqa: E402
+from model.longterm import long_term_settlement, section_response  # noqa: E402
 from model.params import Scenario  # noqa: E402
-from model.pipeline import StageCache, run  # noqa: E402
+from model.pipeline import STAGES, StageCache, run  # noqa: E402
+from model.settlement import soil_response  # noqa: E402
 
 REPEATS = 5
 
@@ -36,7 +38,6 @@ def main() -> None:
     results = run(scenario, cache=cache)  # warm caches, and the stages to reuse
     load = results.load
     dt = float(load.t_s[1] - load.t_s[0])
-    depth = results.soil.depth_m
 
     def longterm_stage(i):
         scenario.longterm.trains_per_day = 200.0 + i
@@ -49,24 +50,23 @@ def main() -> None:
 
     def rerun(i):
         scenario.longterm.years = 10.0 + i
-        assert run(scenario, cache=cache).cached_stages == (
-            "vehicle_track",
-            "load",
-            "soil",
-            "stress",
-        )
+        assert run(scenario, cache=cache).cached_stages == STAGES[:-1]
 
     figures = {
         "long-term stage alone (bogies)": best_time(longterm_stage),
         "long-term stage alone (rainflow)": best_time(longterm_rainflow),
         "pipeline re-run, long-term inputs changed": best_time(rerun),
-        "stress stage (runs with the soil stage)": best_time(
-            lambda i: stress_response(load.line_load_N_per_m, dt, depth, scenario)
+        "soil stage, displacements only": best_time(
+            lambda i: soil_response(
+                load.line_load_N_per_m, dt, scenario.tunnel, scenario.soil, scenario.numerics
+            )
+        ),
+        "soil stage, displacements + stresses": best_time(
+            lambda i: section_response(load.line_load_N_per_m, dt, scenario)
         ),
     }
     for label, seconds in figures.items():
         print(f"paper  {label:45s} {seconds:7.4f} s")
-    print(f"paper  soil stage in the first run            {results.stage_seconds['soil']:7.4f} s")
 
 
 if __name__ == "__main__":

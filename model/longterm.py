@@ -44,9 +44,14 @@ import numpy as np
 import rainflow
 from scipy.integrate import cumulative_trapezoid
 
-from model.settlement import padded_record_grid
+from model.settlement import (
+    SoilResponse,
+    displacement_response,
+    output_depths,
+    padded_record_grid,
+)
 from model.tunnel_soil import soil_field
-from model.tunnel_soil_3d import StressField, invert_stress_2p5d
+from model.tunnel_soil_3d import StressField, invert_response_2p5d
 
 GRAVITY = 9.81  # m/s²
 WATER_DENSITY = 1000.0  # kg/m³
@@ -103,6 +108,11 @@ def plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics: in
     StressField
         Complex (n_freq, n_depth), Pa per N/m.
     """
+    return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics)[1]
+
+
+def _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics: int):
+    """(receptance, StressField) under the invert from one 2D kernel evaluation."""
     depth = np.atleast_1d(np.asarray(depth_m, dtype=float))
     if np.any(depth < 0.0):
         raise ValueError(
@@ -114,7 +124,7 @@ def plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics: in
     lame = soil.bulk_modulus * (1.0 + 1j * soil.bulk_loss_factor) - 2.0 * shear / 3.0
     axial = lame / (2.0 * (lame + shear)) * (field.sigma_rr + field.sigma_thetatheta)
     zero = np.zeros_like(field.sigma_rr)
-    return StressField(
+    return field.u_r, StressField(
         sigma_rr=field.sigma_rr,
         sigma_thetatheta=field.sigma_thetatheta,
         sigma_xx=axial,
@@ -134,19 +144,56 @@ def stress_transfer(freq_hz, depth_m, scenario) -> StressField:
     depth_m : array_like
         Depths d ≥ 0 below the ring–soil interface (m).
     scenario : model.params.Scenario
-        Uses tunnel, soil and numerics.n_harmonics.
+        Uses tunnel, soil, numerics.n_harmonics and (2.5D model) train.speed.
 
     Returns
     -------
     StressField
         Complex (n_freq, n_depth), Pa per N/m.
     """
+    return invert_transfer(freq_hz, depth_m, scenario)[1]
+
+
+def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField]:
+    """Receptance and stresses under the invert per unit line load, one kernel evaluation.
+
+    The receptance is :func:`model.settlement.section_receptance`'s and the stresses
+    :func:`stress_transfer`'s (the same numbers), from a single evaluation of the scenario's
+    tunnel–soil kernel (2D, or 2.5D at ξ = ω/v, docs/model.md §9).
+
+    Parameters
+    ----------
+    freq_hz : array_like
+        Frequencies (Hz), > 0.
+    depth_m : array_like
+        Depths d ≥ 0 below the ring–soil interface (m).
+    scenario : model.params.Scenario
+        Uses tunnel, soil, numerics.n_harmonics and (2.5D model) train.speed.
+
+    Returns
+    -------
+    (ndarray, StressField)
+        Complex (n_freq, n_depth) receptance (m per N/m) and stresses (Pa per N/m).
+    """
     tunnel, soil, n_harmonics = scenario.tunnel, scenario.soil, scenario.numerics.n_harmonics
     if tunnel.model == "2.5d":  # the moving train: the kernel at ξ = ω/v (docs/model.md §9)
         freq = np.atleast_1d(np.asarray(freq_hz, dtype=float))
         wavenumber = 2.0 * np.pi * freq / scenario.train.speed
-        return invert_stress_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics)
-    return plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics)
+        return invert_response_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics)
+    return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics)
+
+
+def _grid_transfer(f_hz, depth, scenario) -> tuple[np.ndarray, StressField]:
+    """:func:`invert_transfer` at a record grid's frequencies, row 0 the DC band value.
+
+    The DC row is Re of the value at Δf/(2e) (module docstring, step 2), evaluated in the same
+    kernel call as the other frequencies.
+    """
+    freq = np.concatenate([[0.5 * f_hz[1] / math.e], f_hz[1:]])
+    receptance, stresses = invert_transfer(freq, depth, scenario)
+    for component in (receptance, *stress_components(stresses)):
+        component[0] = component[0].real
+    return receptance, stresses
 
 
 def deviator_stress(
@@ -179,7 +226,7 @@ def deviator_stress(
 
 @dataclass(frozen=True)
 class StressResponse:
-    """Stress stage result: the dynamic deviator under the invert during one passage."""
+    """The dynamic deviator under the invert during one passage (from the soil stage)."""
 
     depth_m: np.ndarray
     """(nd,) depths below the ring–soil interface (m), as in the soil stage."""
@@ -216,18 +263,54 @@ def stress_response(line_load_N_per_m, dt_s: float, depth_m, scenario) -> Stress
     grid = padded_record_grid(
         line_load_N_per_m, dt_s, scenario.numerics, scenario.soil.s_wave_speed
     )
-    f_hz = grid.f_hz
-    dc = stress_transfer(np.array([0.5 * f_hz[1] / math.e]), depth, scenario)
-    rest = stress_transfer(f_hz[1:], depth, scenario)
-    histories = []
-    for dc_part, transfer in zip(stress_components(dc), stress_components(rest), strict=True):
-        if not (np.any(dc_part) or np.any(transfer)):
-            histories.append(np.zeros((depth.size, grid.n_out)))
-            continue
-        spectrum = (
-            np.concatenate([dc_part.real.astype(complex), transfer]) * grid.load_spectrum[:, None]
-        )
-        histories.append(grid.time_histories(spectrum.T))
+    return _deviator_response(grid, depth, _grid_transfer(grid.f_hz, depth, scenario)[1])
+
+
+def section_response(
+    line_load_N_per_m, dt_s: float, scenario
+) -> tuple[SoilResponse, StressResponse]:
+    """Displacements and stresses under the invert for a line-load history, one kernel pass.
+
+    The same results as :func:`model.settlement.soil_response` and :func:`stress_response` at
+    the depths :func:`model.settlement.output_depths`, with the tunnel–soil kernel evaluated
+    once per frequency for both.
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Downward line load on the invert q(t) (N/m), sampled from t = 0 at ``dt_s``.
+    dt_s : float
+        Sampling interval (s), > 0.
+    scenario : model.params.Scenario
+        Uses tunnel, soil, train.speed (2.5D model) and numerics (n_harmonics,
+        soil_max_frequency, zero_pad_factor, psd_segment, max_depth, n_depths).
+
+    Returns
+    -------
+    (SoilResponse, StressResponse)
+    """
+    numerics = scenario.numerics
+    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    depth = output_depths(numerics)
+    receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
+    soil = displacement_response(grid, depth, receptance, numerics)
+    return soil, _deviator_response(grid, depth, stresses)
+
+
+def _deviator_response(grid, depth, stresses: StressField) -> StressResponse:
+    """Deviator histories, peaks and rainflow counts from stress transfer functions on a grid.
+
+    Components that vanish identically (σ_rθ, σ_θx at θ = 0; σ_rx in 2D) are not transformed;
+    the others go through one batched inverse FFT.
+    """
+    components = stress_components(stresses)
+    nonzero = [k for k, component in enumerate(components) if np.any(component)]
+    spectra = np.stack([components[k] for k in nonzero]) * grid.load_spectrum[:, None]
+    n_depth = depth.size
+    transformed = grid.time_histories(spectra.transpose(0, 2, 1).reshape(-1, grid.f_hz.size))
+    histories = [np.zeros((n_depth, grid.n_out))] * len(components)
+    for row, k in enumerate(nonzero):
+        histories[k] = transformed[row * n_depth : (row + 1) * n_depth]
     deviator = deviator_stress(*histories)
     return StressResponse(
         depth_m=depth,
@@ -531,7 +614,7 @@ def long_term_settlement(stress: StressResponse, scenario) -> LongTermResult:
     Parameters
     ----------
     stress : StressResponse
-        Deviator under the invert per passage (the stress stage).
+        Deviator under the invert per passage (computed with the soil stage, Results.stress).
     scenario : model.params.Scenario
         Uses longterm, tunnel.ring_radius, soil.density and train (number of bogies).
 

@@ -1,5 +1,6 @@
-"""The one place the stages are chained: vehicle–track → invert load → soil response →
-stresses under the invert → long-term settlement.
+"""The one place the stages are chained: vehicle–track → invert load → soil response
+(displacements and stresses under the invert, one tunnel–soil kernel pass) → long-term
+settlement.
 
 ``run(scenario)`` returns :class:`Results`. Each stage is cached on exactly the parameters it
 depends on, so moving a soil slider reuses the vehicle–track simulation and moving the speed
@@ -30,11 +31,11 @@ from model.longterm import (
     StressResponse,
     check_longterm_inputs,
     long_term_settlement,
-    stress_response,
+    section_response,
 )
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
-from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail, soil_response
+from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail
 from model.spectra import one_sided_psd
 from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
@@ -60,7 +61,9 @@ SOIL_NUMERICS = (
     *WAVENUMBER_NUMERICS,
 )
 
-STAGES = ("vehicle_track", "load", "soil", "stress", "longterm")
+# The soil stage also yields the stresses under the invert (Results.stress): both come from
+# one evaluation of the tunnel–soil kernel, so they share a stage and its cache key.
+STAGES = ("vehicle_track", "load", "soil", "longterm")
 
 
 class SimulationError(RuntimeError):
@@ -93,6 +96,7 @@ class Results:
     load: LoadResult
     soil: SoilResponse
     stress: StressResponse
+    """Dynamic deviator under the invert, computed by the soil stage."""
     longterm: LongTermResult
     warnings: list[str] = field(default_factory=list)
     stage_seconds: dict[str, float] = field(default_factory=dict)
@@ -196,11 +200,10 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     }
     if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v
         soil["speed_kmh"] = data["train"]["speed_kmh"]
-    stress = {"upstream": soil}
-    longterm = {"upstream": stress, "longterm": data["longterm"]}
+    longterm = {"upstream": soil, "longterm": data["longterm"]}
     return {
         name: json.dumps(value, sort_keys=True)
-        for name, value in zip(STAGES, (vehicle_track, load, soil, stress, longterm), strict=True)
+        for name, value in zip(STAGES, (vehicle_track, load, soil, longterm), strict=True)
     }
 
 
@@ -281,22 +284,9 @@ def run(
             "the vehicle–track simulation went unstable: " + "; ".join(vt.warnings)
         )
     load = stage("load", lambda: _load_stage(vt, scenario))
-    soil = stage(
+    soil, stress = stage(
         "soil",
-        lambda: soil_response(
-            load.line_load_N_per_m,
-            _time_step(load.t_s),
-            scenario.tunnel,
-            scenario.soil,
-            scenario.numerics,
-            speed_m_s=scenario.train.speed,
-        ),
-    )
-    stress = stage(
-        "stress",
-        lambda: stress_response(
-            load.line_load_N_per_m, _time_step(load.t_s), soil.depth_m, scenario
-        ),
+        lambda: section_response(load.line_load_N_per_m, _time_step(load.t_s), scenario),
     )
     longterm = stage("longterm", lambda: long_term_settlement(stress, scenario))
     run_warnings = (
@@ -319,7 +309,11 @@ def run(
 
 
 def _read_only(stage_result):
-    """The stage result with every array field made read-only (returned for chaining)."""
+    """The stage result (or tuple of results) with every array field made read-only."""
+    if isinstance(stage_result, tuple):
+        for part in stage_result:
+            _read_only(part)
+        return stage_result
     for item in fields(stage_result):
         value = getattr(stage_result, item.name)
         if isinstance(value, np.ndarray):

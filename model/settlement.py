@@ -287,18 +287,54 @@ def soil_response(
     SoilResponse
     """
     grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, soil.s_wave_speed)
-    f_hz, load_spectrum = grid.f_hz, grid.load_spectrum
-    n_keep = f_hz.size
-
-    depth = np.linspace(0.0, numerics.max_depth, numerics.n_depths)
-    receptance = np.empty((n_keep, depth.size), dtype=complex)
+    f_hz = grid.f_hz
+    depth = output_depths(numerics)
+    receptance = np.empty((f_hz.size, depth.size), dtype=complex)
     receptance[0] = dc_band_receptance(
         0.5 * f_hz[1], depth, tunnel, soil, numerics.n_harmonics, speed_m_s
     )
     receptance[1:] = section_receptance(
         f_hz[1:], depth, tunnel, soil, numerics.n_harmonics, speed_m_s
     )
+    return displacement_response(grid, depth, receptance, numerics)
 
+
+def output_depths(numerics) -> np.ndarray:
+    """Depths below the ring–soil interface at which the soil stage reports (m).
+
+    Parameters
+    ----------
+    numerics : model.params.Numerics
+        Uses max_depth and n_depths.
+
+    Returns
+    -------
+    ndarray
+        (n_depths,) depths from 0 to ``max_depth``, evenly spaced.
+    """
+    return np.linspace(0.0, numerics.max_depth, numerics.n_depths)
+
+
+def displacement_response(grid: RecordGrid, depth_m, receptance, numerics) -> SoilResponse:
+    """Displacement histories, peaks and spectra from the receptance at the grid's frequencies.
+
+    Parameters
+    ----------
+    grid : RecordGrid
+        The padded, band-limited load record (:func:`padded_record_grid`).
+    depth_m : ndarray
+        (nd,) depths below the ring–soil interface (m).
+    receptance : ndarray
+        Complex (nk, nd) receptance at ``grid.f_hz`` (m per N/m), row 0 the band-averaged
+        zero-frequency value (:func:`dc_band_receptance`).
+    numerics : model.params.Numerics
+        Uses psd_segment and soil_max_frequency.
+
+    Returns
+    -------
+    SoilResponse
+    """
+    f_hz, load_spectrum = grid.f_hz, grid.load_spectrum
     disp_spectrum = (receptance * load_spectrum[:, None]).T
     disp = grid.time_histories(disp_spectrum)
     n_out, dt_out = grid.n_out, grid.dt_out
@@ -309,7 +345,7 @@ def soil_response(
     return SoilResponse(
         f_hz=psd_f_hz[in_band],
         interface_psd=psd[in_band],
-        depth_m=depth,
+        depth_m=depth_m,
         peak_disp_m=disp.max(axis=1),
         t_s=np.arange(n_out) * dt_out,
         disp_m=disp,

@@ -184,6 +184,13 @@ def _displacement_terms(n, r, delta_p, delta_s):
 
 
 @numba.njit(cache=True)
+def _normal_stress_parts(n, inv_r, delta_p, delta_s):
+    """T of the P solution and of the P + SV sum at r, with S_rr = (λ* + 2μ*)α² + 2μ* T/r and
+    S_θθ = λ*α² − 2μ* T/r (:func:`_stress_terms`): T_P = n(n + 1)/r + δ_P, T_sum = δ_P − n δ_S."""
+    return n * (n + 1.0) * inv_r + delta_p, delta_p - n * delta_s
+
+
+@numba.njit(cache=True)
 def _stress_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
     """S_rr, S_θθ, S_rθ coefficients of the P solution and of the P + SV sum at r.
 
@@ -192,11 +199,11 @@ def _stress_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
     cancel analytically in the sum, so its O(δ) terms keep full relative precision.
     """
     inv_r = 1.0 / r
-    nn1 = n * (n + 1.0) * inv_r
-    srr_p = (lame + 2.0 * shear) * alpha * alpha + 2.0 * shear * (nn1 + delta_p) * inv_r
-    srr_sum = (lame + 2.0 * shear) * alpha * alpha + 2.0 * shear * (delta_p - n * delta_s) * inv_r
-    stt_p = lame * alpha * alpha - 2.0 * shear * (nn1 + delta_p) * inv_r
-    stt_sum = lame * alpha * alpha + 2.0 * shear * (n * delta_s - delta_p) * inv_r
+    t_p, t_sum = _normal_stress_parts(n, inv_r, delta_p, delta_s)
+    srr_p = (lame + 2.0 * shear) * alpha * alpha + 2.0 * shear * t_p * inv_r
+    srr_sum = (lame + 2.0 * shear) * alpha * alpha + 2.0 * shear * t_sum * inv_r
+    stt_p = lame * alpha * alpha - 2.0 * shear * t_p * inv_r
+    stt_sum = lame * alpha * alpha - 2.0 * shear * t_sum * inv_r
     srt_p = 2.0 * shear * n * ((n + 1.0) * inv_r + delta_p) * inv_r
     srt_sum = shear * (2.0 * (n * delta_p - delta_s) * inv_r - beta * beta)
     return srr_p, srr_sum, stt_p, stt_sum, srt_p, srt_sum
@@ -334,6 +341,15 @@ def ring_soil_field_kernel(
             delta_s = beta * ratio_s
             two_over_zp = 2.0 / zp
             two_over_zs = 2.0 / zs
+            inv_r = 1.0 / r
+            # Sums over n of the cos-type terms: u_r; Σ cw (c_P + c_sum) and Σ cw (c_P T_P +
+            # c_sum T_sum), from which σ_rr and σ_θθ follow after the loop
+            # (_normal_stress_parts); and the sin-type u_θ, σ_rθ (zero weights skipped).
+            sum_ur = 0j
+            sum_ut = 0j
+            sum_amp = 0j
+            sum_t = 0j
+            sum_srt = 0j
             for n in range(n_max + 1):
                 cw = cos_weight[j, n]
                 sw = sin_weight[j, n]
@@ -342,15 +358,18 @@ def ring_soil_field_kernel(
                     c_sum = amp_sum[n] * e_s
                     c_p = amp_p[n] * e_p + amp_sum[n] * (e_p - e_s)
                     u_p, v_p, u_sum, v_sum = _displacement_terms(n, r, delta_p, delta_s)
-                    u_r[i, j] += cw * (c_p * u_p + c_sum * u_sum)
-                    u_t[i, j] += sw * (c_p * v_p + c_sum * v_sum)
+                    sum_ur += cw * (c_p * u_p + c_sum * u_sum)
+                    if sw != 0.0:
+                        sum_ut += sw * (c_p * v_p + c_sum * v_sum)
                     if with_stresses:
-                        srr_p, srr_sum, stt_p, stt_sum, srt_p, srt_sum = _stress_terms(
-                            n, r, alpha, beta, delta_p, delta_s, shear, lame
-                        )
-                        s_rr[i, j] += cw * (c_p * srr_p + c_sum * srr_sum)
-                        s_tt[i, j] += cw * (c_p * stt_p + c_sum * stt_sum)
-                        s_rt[i, j] += sw * (c_p * srt_p + c_sum * srt_sum)
+                        t_p, t_sum = _normal_stress_parts(n, inv_r, delta_p, delta_s)
+                        sum_amp += cw * (c_p + c_sum)
+                        sum_t += cw * (c_p * t_p + c_sum * t_sum)
+                        if sw != 0.0:
+                            srt_p, srt_sum = _stress_terms(
+                                n, r, alpha, beta, delta_p, delta_s, shear, lame
+                            )[4:]
+                            sum_srt += sw * (c_p * srt_p + c_sum * srt_sum)
                 if r != a:  # at r = a, e_P = e_S = 1 exactly, and Y (e_P − e_S) must vanish
                     e_p *= ratio_p * inv_ratio_p_a[n]
                     e_s *= ratio_s * inv_ratio_s_a[n]
@@ -360,6 +379,13 @@ def ring_soil_field_kernel(
                 delta_s = beta * recip_s
                 ratio_p = recip_p + (n + 1) * two_over_zp
                 ratio_s = recip_s + (n + 1) * two_over_zs
+            u_r[i, j] = sum_ur
+            u_t[i, j] = sum_ut
+            if with_stresses:
+                shear_part = 2.0 * shear * sum_t * inv_r
+                s_rr[i, j] = (lame + 2.0 * shear) * alpha * alpha * sum_amp + shear_part
+                s_tt[i, j] = lame * alpha * alpha * sum_amp - shear_part
+                s_rt[i, j] = sum_srt
     return u_r, u_t, s_rr, s_tt, s_rt
 
 

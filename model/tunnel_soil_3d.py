@@ -306,6 +306,16 @@ def shell_soil_field_kernel(
             delta_s = beta * ratio_s
             two_over_zp = 2.0 / zp
             two_over_zs = 2.0 / zs
+            inv_r = 1.0 / r
+            # Sums over n from which the stresses follow after the loop: the coefficients of
+            # _field_vectors are linear in c_P + c_sum, in the T terms (2μ* T/r in S_rr, minus
+            # that in S_θθ), in c_diff and in c_axial, whose factors depend only on (ω, ξ).
+            sum_ur = 0j
+            sum_amp = 0j  # Σ c_P + c_sum
+            sum_t = 0j  # Σ c_P (n(n+1)/r + δ_P) + c_sum (δ_P − n δ_S) + c_diff (δ_S − δ_P)
+            sum_diff = 0j  # Σ c_diff
+            sum_axial = 0j  # Σ c_axial
+            sum_rx = 0j  # Σ S̃_rx / μ*
             for n in range(n_max + 1):
                 # X e_P P + Y (e_P P + e_S SV) + Z (ξ e_S G_S − ξ e_P P + k₂² e_S e_x)
                 #   = c_p P + c_sum (P + SV) + c_diff (G_S − P) + c_axial e_x
@@ -313,30 +323,23 @@ def shell_soil_field_kernel(
                 c_sum = amp_y[n] * e_s
                 c_diff = q * amp_z[n] * e_s
                 # U_r of grad_P, of the sum and of the difference: −n/r − δ_P, −δ_P, δ_P − δ_S
-                u_r[i, j] += (
-                    c_p * (-n / r - delta_p) - c_sum * delta_p + c_diff * (delta_p - delta_s)
-                )
+                sum_ur += c_p * (-n / r - delta_p) - c_sum * delta_p + c_diff * (delta_p - delta_s)
                 if with_stresses:
                     c_axial = k2sq * amp_z[n] * e_s
-                    grad_p, total, diff, unit_axial = _field_vectors(
-                        n, r, q, delta_p, delta_s, omega2_rho, k1sq, k2sq, shear, lame
+                    n_r = n * inv_r
+                    ddelta = delta_s - delta_p
+                    sum_amp += c_p + c_sum
+                    sum_t += (
+                        c_p * (n_r * (n + 1.0) + delta_p)
+                        + c_sum * (delta_p - n * delta_s)
+                        + c_diff * ddelta
                     )
-                    s_rr[i, j] += (
-                        c_p * grad_p[2] + c_sum * total[2] + c_diff * diff[2]
-                        + c_axial * unit_axial[2]
-                    )  # fmt: skip
-                    s_tt[i, j] += (
-                        c_p * grad_p[3] + c_sum * total[3] + c_diff * diff[3]
-                        + c_axial * unit_axial[3]
-                    )  # fmt: skip
-                    s_xx[i, j] += (
-                        c_p * grad_p[4] + c_sum * total[4] + c_diff * diff[4]
-                        + c_axial * unit_axial[4]
-                    )  # fmt: skip
-                    s_rx[i, j] += (
-                        c_p * grad_p[5] + c_sum * total[5] + c_diff * diff[5]
-                        + c_axial * unit_axial[5]
-                    )  # fmt: skip
+                    sum_diff += c_diff
+                    sum_axial += c_axial
+                    sum_rx += q * (
+                        2.0 * c_p * (n_r + delta_p) + c_sum * (n_r + 2.0 * delta_p)
+                        + 2.0 * c_diff * ddelta
+                    ) - c_axial * (n_r + delta_s)  # fmt: skip
                 if r != a:
                     e_p *= ratio_p * inv_ratio_p_a[n]
                     e_s *= ratio_s * inv_ratio_s_a[n]
@@ -346,6 +349,23 @@ def shell_soil_field_kernel(
                 delta_s = beta * recip_s
                 ratio_p = recip_p + (n + 1) * two_over_zp
                 ratio_s = recip_s + (n + 1) * two_over_zs
+            u_r[i, j] = sum_ur
+            if with_stresses:  # _field_vectors' coefficients applied to the sums
+                two_mu = 2.0 * shear
+                axial = two_mu * q * q
+                lame_k1 = lame * k1sq
+                dk = lame * (k1sq - k2sq)
+                shear_part = two_mu * sum_t * inv_r
+                lame_xi_axial = lame * q * sum_axial
+                s_rr[i, j] = (
+                    (axial - omega2_rho) * sum_amp + shear_part
+                    + (omega2_rho - (lame + two_mu) * k2sq) * sum_diff + lame_xi_axial
+                )  # fmt: skip
+                s_tt[i, j] = -lame_k1 * sum_amp - shear_part + dk * sum_diff + lame_xi_axial
+                s_xx[i, j] = (
+                    (-lame_k1 - axial) * sum_amp + dk * sum_diff + (lame + two_mu) * q * sum_axial
+                )
+                s_rx[i, j] = shear * sum_rx
     return u_r, s_rr, s_tt, s_xx, s_rx
 
 
@@ -494,13 +514,43 @@ def invert_stress_2p5d(
     StressField
         Complex (n, n_depth) stresses in Pa per N/m, tension positive, at θ = 0, x = 0.
     """
+    return invert_response_2p5d(freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics)[
+        1
+    ]
+
+
+def invert_response_2p5d(
+    freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics: int
+) -> tuple[np.ndarray, StressField]:
+    """Receptance and stresses below the invert from one kernel evaluation.
+
+    The per-(n, ξ, ω) shell–soil solve is shared: the receptance equals
+    :func:`receptance_2p5d`'s and the stresses :func:`invert_stress_2p5d`'s, at the cost of
+    one evaluation.
+
+    Parameters
+    ----------
+    freq_hz, wavenumber_rad_per_m : float or array_like
+        Paired frequencies (Hz, > 0) and wavenumbers (rad/m), as in :func:`receptance_2p5d`.
+    depth_m : float or array_like
+        Depths d ≥ 0 below the ring–soil interface (m).
+    tunnel, soil : model.params.Tunnel, model.params.Soil
+        Lining and soil.
+    n_harmonics : int
+        Highest circumferential harmonic N ≥ 0.
+
+    Returns
+    -------
+    (ndarray, StressField)
+        Complex (n, n_depth) receptance in m per N/m and stresses in Pa per N/m.
+    """
     omega, xi = _paired_inputs(freq_hz, wavenumber_rad_per_m)
     depth = _depths(depth_m)
-    _, s_rr, s_tt, s_xx, s_rx = _run_kernel(
+    u_r, s_rr, s_tt, s_xx, s_rx = _run_kernel(
         omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True
     )
     zero = np.zeros_like(s_rr)
-    return StressField(
+    return u_r, StressField(
         sigma_rr=s_rr,
         sigma_thetatheta=s_tt,
         sigma_xx=s_xx,

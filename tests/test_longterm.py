@@ -33,6 +33,7 @@ from model.longterm import (
 )
 from model.params import DATA_DIR, LongTerm, Scenario, Soil, Tunnel
 from model.pipeline import STAGES, StageCache, run
+from model.settlement import soil_response
 from model.tunnel_soil import invert_receptance
 
 SYNTHETIC_CSV = DATA_DIR / "triaxial_synthetic.csv"
@@ -182,8 +183,11 @@ def test_deviator_from_the_stress_stage_matches_the_cavity_under_a_slow_pulse(mo
     scenario.numerics.max_depth = 11.0
     monkeypatch.setattr(
         longterm,
-        "stress_transfer",
-        lambda f, d, s: plane_strain_stress_transfer(f, d, s.tunnel, s.soil, 0),
+        "invert_transfer",
+        lambda f, d, s: (
+            invert_receptance(f, d, s.tunnel, s.soil, 0),
+            plane_strain_stress_transfer(f, d, s.tunnel, s.soil, 0),
+        ),
     )
     dt = 0.01
     t = np.arange(0.0, 20.0, dt)
@@ -194,6 +198,26 @@ def test_deviator_from_the_stress_stage_matches_the_cavity_under_a_slow_pulse(mo
     expected = peak_load * _cavity_deviator_per_line_load(scenario.tunnel, scenario.soil, depth)
     np.testing.assert_allclose(stress.deviator_Pa, expected, rtol=5e-3)
     assert stress.rainflow_cycles == pytest.approx(1.0, abs=0.02)
+
+
+@pytest.mark.parametrize("model", ["2d", "2.5d"])
+def test_one_kernel_pass_gives_exactly_the_separate_soil_and_stress_results(cheap_scenario, model):
+    """section_response (the pipeline's soil stage) shares one kernel evaluation between the
+    displacements and the stresses; it must reproduce soil_response and stress_response bit for
+    bit (tolerance 0: the same kernel arithmetic per frequency, the same transforms)."""
+    scenario = cheap_scenario()
+    scenario.tunnel.model = model
+    load = run(scenario, cache=None).load
+    q, dt = load.line_load_N_per_m, float(load.t_s[1] - load.t_s[0])
+    soil, stress = longterm.section_response(q, dt, scenario)
+    alone = soil_response(
+        q, dt, scenario.tunnel, scenario.soil, scenario.numerics, speed_m_s=scenario.train.speed
+    )
+    for name in ("peak_disp_m", "disp_m", "interface_psd", "interface_amplitude_m_per_hz"):
+        np.testing.assert_array_equal(getattr(soil, name), getattr(alone, name))
+    stress_alone = stress_response(q, dt, soil.depth_m, scenario)
+    for name in ("deviator_history_Pa", "deviator_Pa", "rainflow_cycles"):
+        np.testing.assert_array_equal(getattr(stress, name), getattr(stress_alone, name))
 
 
 def test_stress_stage_uses_the_soil_stage_time_grid_and_depths(results):
