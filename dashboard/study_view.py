@@ -23,6 +23,8 @@ import numpy as np
 import pandas as pd
 import panel as pn
 import param
+from bokeh.models import PrintfTickFormatter
+from holoviews.streams import Pipe
 
 from dashboard.plots import _COMMON, MM
 from model.params import SECTIONS, Scenario
@@ -35,7 +37,8 @@ RESULTS = {
 }
 """Summary keys drawn against the varied parameters (in mm), when the table has them."""
 EXCLUDED = {"irregularity.seed"}  # varied through the seeds
-REFRESH_S = 0.5  # at most this often the plots are redrawn while rows stream in
+REFRESH_S = 1.0  # at most this often the plots are redrawn while rows stream in
+REFRESH_LOAD = 0.25  # and the redraws take at most this share of the event loop
 MAX_POINTS = 50  # per parameter
 MAX_SEEDS = 200
 
@@ -141,23 +144,36 @@ def depth_envelope_plot(table: pd.DataFrame) -> hv.Overlay:
     )
 
 
-def study_plots(table: pd.DataFrame) -> list[hv.Element | hv.Overlay]:
-    """Every plot of a study table: per result, band (one parameter) or heat map (two); then the
-    depth envelope (if the table has the depth profile)."""
-    done = table.dropna(subset=[k for k in RESULTS if k in table])
-    if done.empty:
-        return []
-    bands = aggregate(done)
-    paths = [c for c in bands.columns if "." in c and c.partition(".")[0] in SECTIONS]
-    plots = []
-    for key in (k for k in RESULTS if k in done):
+def plot_slots(table: pd.DataFrame) -> dict[str, Callable[[pd.DataFrame], hv.Element]]:
+    """The plots a study table calls for, by name → function of the table: per result, a band
+    (one parameter) or heat map (two); then the depth envelope (if the table has the profile)."""
+    paths = [c for c in table.columns if "." in c and c.partition(".")[0] in SECTIONS]
+    slots = {}
+    for key in (k for k in RESULTS if k in table):
         if len(paths) == 1:
-            plots.append(band_plot(bands, paths[0], key))
+            slots[key] = _bands_then(band_plot, paths[0], key=key)
         elif len(paths) == 2:
-            plots.append(heat_map(bands, paths[0], paths[1], key))
-    if profile_depths(done):
-        plots.append(depth_envelope_plot(done))
-    return plots
+            slots[key] = _bands_then(heat_map, paths[0], paths[1], key=key)
+    if profile_depths(table):
+        slots["depth"] = lambda data: depth_envelope_plot(_finished(data))
+    return slots
+
+
+def _finished(table: pd.DataFrame) -> pd.DataFrame:
+    """Rows of runs that succeeded."""
+    return table.dropna(subset=[k for k in RESULTS if k in table])
+
+
+def _bands_then(draw, *paths: str, key: str):
+    """``draw(aggregate(finished rows), *paths, key)`` as a function of the table."""
+    return lambda table: draw(aggregate(_finished(table)), *paths, key)
+
+
+def study_plots(table: pd.DataFrame) -> list[hv.Element | hv.Overlay]:
+    """Every plot of a study table (see :func:`plot_slots`), drawn now."""
+    if _finished(table).empty:
+        return []
+    return [draw(table) for draw in plot_slots(table).values()]
 
 
 class StudyView(pn.viewable.Viewer):
@@ -188,10 +204,13 @@ class StudyView(pn.viewable.Viewer):
         self.first = pn.widgets.Select(label="First parameter", options=labels, value=default)
         self.second = pn.widgets.Select(label="Second parameter", options=[NONE, *labels])
         self.first_range = pn.widgets.EditableRangeSlider(
-            label="Range", sizing_mode="stretch_width"
+            label="Range", sizing_mode="stretch_width", css_classes=["study-range-first"]
         )
         self.second_range = pn.widgets.EditableRangeSlider(
-            label="Range", sizing_mode="stretch_width", visible=False
+            label="Range",
+            sizing_mode="stretch_width",
+            visible=False,
+            css_classes=["study-range-second"],
         )
         self.first_points = pn.widgets.IntInput(label="Points", value=5, start=1, end=MAX_POINTS)
         self.second_points = pn.widgets.IntInput(
@@ -214,9 +233,11 @@ class StudyView(pn.viewable.Viewer):
         self._rows: list[dict] = []
         self._lock = threading.Lock()
         self._doc = None
-        self._last_refresh = 0.0
+        self._last_refresh = self._refresh_seconds = 0.0
         self._refresh_pending = False
         self._thread: threading.Thread | None = None
+        self._pipe = Pipe(data=None)
+        self._slot_names: list[str] = []
 
     def __panel__(self) -> pn.viewable.Viewable:
         controls = pn.Column(
@@ -245,7 +266,14 @@ class StudyView(pn.viewable.Viewer):
         p = Scenario.param[section].class_.param[name]
         low, high = p.softbounds
         step = 1 if isinstance(p, param.Integer) else 10.0 ** np.floor(np.log10((high - low) / 100))
-        slider.param.update(label=p.label, start=low, end=high, value=(low, high), step=step)
+        slider.param.update(
+            label=p.label,
+            start=low,
+            end=high,
+            value=(low, high),
+            step=step,
+            format=PrintfTickFormatter(format="%.4g"),  # 1e+06, not a cut-off 1000000.0
+        )
 
     def _on_second(self, event) -> None:
         shown = event.new != NONE
@@ -287,7 +315,7 @@ class StudyView(pn.viewable.Viewer):
         self._cancel.clear()
         self._rows = []
         self.table = None
-        self.plots.objects = []
+        self.plots.objects, self._slot_names = [], []
         self.progress.param.update(value=0, max=n_runs)
         self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
         self.running = True
@@ -329,10 +357,12 @@ class StudyView(pn.viewable.Viewer):
         self._on_page(partial(self._finish, outcome))
 
     def _on_row(self, done: int, total: int, row: dict) -> None:
-        """A run came back (study thread): keep it, redraw at most every REFRESH_S."""
+        """A run came back (study thread): keep it; redraw at most every REFRESH_S, and less
+        often when redrawing is slow, so the event loop stays free for the users."""
         with self._lock:
             self._rows.append(row)
-            due = time.monotonic() - self._last_refresh > REFRESH_S and not self._refresh_pending
+            wait = max(REFRESH_S, self._refresh_seconds / REFRESH_LOAD)
+            due = time.monotonic() - self._last_refresh > wait and not self._refresh_pending
             if due:
                 self._refresh_pending = True
         if due:
@@ -348,21 +378,37 @@ class StudyView(pn.viewable.Viewer):
 
     def _refresh(self) -> None:
         """Progress, status and plots from the rows so far."""
+        start = time.monotonic()
         with self._lock:
             rows = list(self._rows)
+        if rows:
+            table = pd.DataFrame(rows)
+            self.table = table
+            self.progress.value = len(rows)
+            self.status.object = f"{len(rows)} of {self.progress.max} runs done"
+            self._draw(table)
+        with self._lock:
             self._refresh_pending = False
             self._last_refresh = time.monotonic()
-        if not rows:
-            return
-        table = pd.DataFrame(rows)
-        self.table = table
-        self.progress.value = len(rows)
-        self.status.object = f"{len(rows)} of {self.progress.max} runs done"
-        self._draw(table)
+            self._refresh_seconds = self._last_refresh - start
 
     def _draw(self, table: pd.DataFrame) -> None:
+        """Send the table to the plots; build them only when the set of plots changes (a new
+        study), so streaming rows update the figures in place instead of replacing them."""
+        if _finished(table).empty:
+            return
+        slots = plot_slots(table)
+        if list(slots) == self._slot_names:
+            self._pipe.send(table)
+            return
+        self._pipe = Pipe(data=table)
+        self._slot_names = list(slots)
         self.plots.objects = [
-            pn.pane.HoloViews(plot, sizing_mode="stretch_width") for plot in study_plots(table)
+            pn.pane.HoloViews(
+                hv.DynamicMap(lambda data, draw=draw: draw(data), streams=[self._pipe]),
+                sizing_mode="stretch_width",
+            )
+            for draw in slots.values()
         ]
 
     def _finish(self, outcome: pd.DataFrame | Exception) -> None:

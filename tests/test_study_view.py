@@ -101,11 +101,15 @@ def test_one_parameter_study_draws_mean_and_band(view):
     assert view.progress.value == 4 == view.progress.max
     table = view.table
     bands = aggregate(table)
-    band, depth = (pane.object for pane in view.plots.objects)
+    band, depth = (pane.object[()] for pane in view.plots.objects)
     area, curve = band.values()
     np.testing.assert_array_equal(curve.dimension_values(1), bands["peak_disp_invert_m_mean"] * 1e3)
     np.testing.assert_array_equal(area.dimension_values(1), bands["peak_disp_invert_m_p05"] * 1e3)
     np.testing.assert_array_equal(area.dimension_values(2), bands["peak_disp_invert_m_p95"] * 1e3)
+    panes = list(view.plots.objects)
+    view._draw(table.iloc[:3])  # fewer rows: same plots, new data, figures kept
+    assert view.plots.objects == panes
+    assert len(panes[0].object[()].values()[1]) == 2 and panes[0].object[()] is not band
     envelope = next(c for c in depth.values() if c.label == "envelope")
     profiles = table[[c for c in table if c.startswith("profile_")]].to_numpy() * 1e3
     np.testing.assert_array_equal(envelope.dimension_values(0), profiles.max(axis=0))
@@ -120,7 +124,7 @@ def test_two_parameter_study_draws_a_heat_map(view):
     view.second_points.value = 2
     view.seeds.value = 1
     view.start()
-    heat = view.plots.objects[0].object
+    heat = view.plots.objects[0].object[()]
     assert isinstance(heat, hv.HeatMap)
     assert len(heat) == 4
     bands = aggregate(view.table)
