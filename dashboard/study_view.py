@@ -320,6 +320,9 @@ class StudyView(pn.viewable.Viewer):
         self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
         self.running = True
         self.start_button.disabled, self.cancel_button.disabled = True, False
+        if self._doc is None and pn.state.curdoc is not None and pn.state.curdoc.session_context:
+            # a closed browser tab stops its study instead of leaving it to run to the end
+            pn.state.curdoc.on_session_destroyed(lambda context: self._cancel.set())
         self._doc = pn.state.curdoc
         work = partial(self._work, base, vary, seeds)
         if self.threaded:
