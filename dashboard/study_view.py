@@ -1,0 +1,433 @@
+"""The "Study" view: sweep one or two parameters over irregularity seeds on Dask, live.
+
+A self-contained Panel component, :class:`StudyView`, given a callable that returns the current
+:class:`~model.params.Scenario` (the dashboard's): choose up to two parameters (labels and
+ranges from :mod:`model.params`), their ranges and points, the number of seeds; start, watch
+the progress, cancel. Results: the mean with its 5–95 % band across seeds against one parameter,
+or a heat map of the mean over two, for the peak displacement at the invert and the long-term
+settlement (when the pipeline reports ``longterm_settlement_m``), and the envelope of the
+peak-displacement depth profiles. The study runs in its own thread on its own Dask cluster
+(:func:`model.study.run_study`), so the served app stays responsive; the page is updated on the
+session's event loop (``add_next_tick_callback``).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from functools import partial
+
+import holoviews as hv
+import numpy as np
+import pandas as pd
+import panel as pn
+import param
+from bokeh.models import PrintfTickFormatter
+from holoviews.streams import Pipe
+
+from dashboard.plots import _COMMON, MM
+from model.params import SECTIONS, Scenario
+from model.study import MAX_RUNS_UNCONFIRMED, aggregate, profile_depths, run_study
+
+NONE = "(none)"
+RESULTS = {
+    "peak_disp_invert_m": "Peak displacement at the invert",
+    "longterm_settlement_m": "Long-term settlement at the invert",
+}
+"""Summary keys drawn against the varied parameters (in mm), when the table has them."""
+EXCLUDED = {"irregularity.seed"}  # varied through the seeds
+REFRESH_S = 1.0  # at most this often the plots are redrawn while rows stream in
+REFRESH_LOAD = 0.25  # and the redraws take at most this share of the event loop
+MAX_POINTS = 50  # per parameter
+MAX_SEEDS = 200
+
+
+def study_parameters() -> dict[str, str]:
+    """Label → dotted path of every number parameter with a slider range (softbounds)."""
+    choices = {}
+    for section in SECTIONS:
+        cls = Scenario.param[section].class_
+        for name, p in cls.param.objects("existing").items():
+            path = f"{section}.{name}"
+            if (
+                isinstance(p, param.Number)
+                and not isinstance(p, param.Boolean)
+                and p.softbounds is not None
+                and path not in EXCLUDED
+            ):
+                choices[f"{p.label} — {path}"] = path
+    return choices
+
+
+def grid_values(path: str, low: float, high: float, n_points: int) -> list[float | int]:
+    """``n_points`` evenly spaced values from ``low`` to ``high`` (distinct whole numbers for an
+    integer parameter)."""
+    values = np.linspace(low, high, n_points) if n_points > 1 else np.array([low])
+    section, _, name = path.partition(".")
+    if isinstance(Scenario.param[section].class_.param[name], param.Integer):
+        return sorted({round(v) for v in values})
+    return [float(v) for v in values]
+
+
+def _label(path: str) -> str:
+    section, _, name = path.partition(".")
+    return Scenario.param[section].class_.param[name].label
+
+
+def _dimension(path: str) -> hv.Dimension:
+    return hv.Dimension(path.replace(".", "_"), label=_label(path))
+
+
+def band_plot(bands: pd.DataFrame, path: str, key: str) -> hv.Overlay:
+    """Mean (line) and 5–95 % band across seeds of ``key`` (m → mm) against one parameter."""
+    x = bands[path].to_numpy(float)
+    order = np.argsort(x)
+    x = x[order]
+    mean, low, high = (bands[f"{key}_{s}"].to_numpy()[order] * MM for s in ("mean", "p05", "p95"))
+    value = hv.Dimension("value_mm", label=RESULTS[key], unit="mm")
+    area = hv.Area(
+        (x, low, high), kdims=[_dimension(path)], vdims=[value, "high"], label="5–95 % of seeds"
+    ).opts(**_COMMON, alpha=0.3, line_width=0)
+    curve = hv.Curve((x, mean), kdims=[_dimension(path)], vdims=[value], label="mean")
+    return (area * curve.opts(**_COMMON)).opts(title=RESULTS[key])
+
+
+def heat_map(bands: pd.DataFrame, path_x: str, path_y: str, key: str) -> hv.HeatMap:
+    """Mean across seeds of ``key`` (m → mm) over two parameters; the band in the hover."""
+    data = pd.DataFrame(
+        {
+            "x": bands[path_x].astype(float),
+            "y": bands[path_y].astype(float),
+            "mean": bands[f"{key}_mean"] * MM,
+            "p05": bands[f"{key}_p05"] * MM,
+            "p95": bands[f"{key}_p95"] * MM,
+        }
+    )
+    kdims = [
+        hv.Dimension("x", label=_label(path_x)),
+        hv.Dimension("y", label=_label(path_y)),
+    ]
+    vdims = [
+        hv.Dimension("mean", label=f"{RESULTS[key]} (mean)", unit="mm"),
+        hv.Dimension("p05", label="5 %", unit="mm"),
+        hv.Dimension("p95", label="95 %", unit="mm"),
+    ]
+    options = {k: v for k, v in _COMMON.items() if k != "show_grid"}
+    return hv.HeatMap(data, kdims=kdims, vdims=vdims).opts(
+        **options, colorbar=True, cmap="viridis", title=f"{RESULTS[key]}, mean of seeds"
+    )
+
+
+def depth_envelope_plot(table: pd.DataFrame) -> hv.Overlay:
+    """Peak displacement against depth: the 5–95 % band and the envelope (max) of every run."""
+    found = profile_depths(table)
+    depth = np.array([d for d, _ in found])
+    peaks = table[[c for _, c in found]].dropna().to_numpy() * MM
+    low, high = np.percentile(peaks, [5, 95], axis=0)
+    kdims = [hv.Dimension("peak_mm", label="Peak dynamic displacement", unit="mm")]
+    vdims = [hv.Dimension("depth", label="Depth below the ring–soil interface", unit="m")]
+    band = hv.Polygons(
+        [
+            {
+                "peak_mm": np.concatenate([low, high[::-1]]),
+                "depth": np.concatenate([depth, depth[::-1]]),
+            }
+        ],
+        kdims=kdims + vdims,
+        label="5–95 % of runs",
+    ).opts(**{k: v for k, v in _COMMON.items() if k != "tools"}, alpha=0.3, line_width=0)
+    envelope = hv.Curve((peaks.max(axis=0), depth), kdims=kdims, vdims=vdims, label="envelope")
+    median = hv.Curve((np.median(peaks, axis=0), depth), kdims=kdims, vdims=vdims, label="median")
+    return (band * envelope.opts(**_COMMON) * median.opts(**_COMMON)).opts(
+        title="Depth profile across the study", invert_yaxis=True
+    )
+
+
+def plot_slots(table: pd.DataFrame) -> dict[str, Callable[[pd.DataFrame], hv.Element]]:
+    """The plots a study table calls for, by name → function of the table: per result, a band
+    (one parameter) or heat map (two); then the depth envelope (if the table has the profile)."""
+    paths = [c for c in table.columns if "." in c and c.partition(".")[0] in SECTIONS]
+    slots = {}
+    for key in (k for k in RESULTS if k in table):
+        if len(paths) == 1:
+            slots[key] = _bands_then(band_plot, paths[0], key=key)
+        elif len(paths) == 2:
+            slots[key] = _bands_then(heat_map, paths[0], paths[1], key=key)
+    if profile_depths(table):
+        slots["depth"] = lambda data: depth_envelope_plot(_finished(data))
+    return slots
+
+
+def _finished(table: pd.DataFrame) -> pd.DataFrame:
+    """Rows of runs that succeeded."""
+    return table.dropna(subset=[k for k in RESULTS if k in table])
+
+
+def _bands_then(draw, *paths: str, key: str):
+    """``draw(aggregate(finished rows), *paths, key)`` as a function of the table."""
+    return lambda table: draw(aggregate(_finished(table)), *paths, key)
+
+
+def study_plots(table: pd.DataFrame) -> list[hv.Element | hv.Overlay]:
+    """Every plot of a study table (see :func:`plot_slots`), drawn now."""
+    if _finished(table).empty:
+        return []
+    return [draw(table) for draw in plot_slots(table).values()]
+
+
+class StudyView(pn.viewable.Viewer):
+    """Study tab: parameters, ranges, seeds; start, progress, cancel; bands or heat maps.
+
+    Parameters
+    ----------
+    scenario_source : callable
+        Returns the current scenario (the base of a new study).
+    scheduler : None, str or distributed.Client
+        Where studies run (see :func:`model.study.study_client`); None: ``$TUNNELSETTLE_SCHEDULER``
+        or a LocalCluster per study.
+    threaded : bool
+        Run the study in its own thread (served app) or in the calling thread (tests).
+    """
+
+    scenario_source = param.Callable(doc="Returns the current Scenario.")
+    scheduler = param.Parameter(default=None, doc="Dask scheduler address or Client, or None.")
+    threaded = param.Boolean(default=True, doc="Run the study in its own thread.")
+    running = param.Boolean(default=False, doc="A study is running.")
+    table = param.DataFrame(default=None, allow_None=True, doc="Rows of the last study so far.")
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.choices = study_parameters()
+        labels = list(self.choices)
+        default = next(label for label, path in self.choices.items() if path == "train.speed_kmh")
+        self.first = pn.widgets.Select(label="First parameter", options=labels, value=default)
+        self.second = pn.widgets.Select(label="Second parameter", options=[NONE, *labels])
+        self.first_range = pn.widgets.EditableRangeSlider(
+            label="Range", sizing_mode="stretch_width", css_classes=["study-range-first"]
+        )
+        self.second_range = pn.widgets.EditableRangeSlider(
+            label="Range",
+            sizing_mode="stretch_width",
+            visible=False,
+            css_classes=["study-range-second"],
+        )
+        self.first_points = pn.widgets.IntInput(label="Points", value=5, start=1, end=MAX_POINTS)
+        self.second_points = pn.widgets.IntInput(
+            label="Points", value=3, start=1, end=MAX_POINTS, visible=False
+        )
+        self.seeds = pn.widgets.IntInput(
+            label="Irregularity seeds", value=10, start=1, end=MAX_SEEDS
+        )
+        self.start_button = pn.widgets.Button(label="Start study", color="primary")
+        self.cancel_button = pn.widgets.Button(label="Cancel", color="warning", disabled=True)
+        self.progress = pn.indicators.Progress(value=0, max=1, sizing_mode="stretch_width")
+        self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.plots = pn.Column(sizing_mode="stretch_width")
+        self.first.param.watch(partial(self._on_parameter, self.first_range), "value")
+        self.second.param.watch(self._on_second, "value")
+        self.start_button.on_click(lambda event: self.start())
+        self.cancel_button.on_click(lambda event: self.cancel())
+        self._on_parameter(self.first_range, None)
+        self._cancel = threading.Event()
+        self._rows: list[dict] = []
+        self._lock = threading.Lock()
+        self._doc = None
+        self._last_refresh = self._refresh_seconds = 0.0
+        self._refresh_pending = False
+        self._thread: threading.Thread | None = None
+        self._pipe = Pipe(data=None)
+        self._slot_names: list[str] = []
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        controls = pn.Column(
+            self.first,
+            self.first_range,
+            self.first_points,
+            self.second,
+            self.second_range,
+            self.second_points,
+            self.seeds,
+            pn.Row(self.start_button, self.cancel_button),
+            self.progress,
+            self.status,
+            width=340,
+        )
+        return pn.Row(controls, self.plots, sizing_mode="stretch_width")
+
+    # ---- inputs ---------------------------------------------------------------------------
+    def _on_parameter(self, slider: pn.widgets.EditableRangeSlider, event) -> None:
+        """A parameter was chosen: its softbounds become the range, its label the name."""
+        select = self.first if slider is self.first_range else self.second
+        if select.value == NONE:
+            return
+        path = self.choices[select.value]
+        section, _, name = path.partition(".")
+        p = Scenario.param[section].class_.param[name]
+        low, high = p.softbounds
+        step = 1 if isinstance(p, param.Integer) else 10.0 ** np.floor(np.log10((high - low) / 100))
+        slider.param.update(
+            label=p.label,
+            start=low,
+            end=high,
+            value=(low, high),
+            step=step,
+            format=PrintfTickFormatter(format="%.4g"),  # 1e+06, not a cut-off 1000000.0
+        )
+
+    def _on_second(self, event) -> None:
+        shown = event.new != NONE
+        self.second_range.visible = self.second_points.visible = shown
+        if shown:
+            self._on_parameter(self.second_range, event)
+
+    def vary(self) -> dict[str, list]:
+        """Grid of the chosen parameters: path → values."""
+        vary = {}
+        pairs = [(self.first, self.first_range, self.first_points)]
+        if self.second.value != NONE:
+            pairs.append((self.second, self.second_range, self.second_points))
+        for select, slider, points in pairs:
+            path = self.choices[select.value]
+            if path in vary:
+                raise ValueError(f"{path} is chosen twice: pick two different parameters")
+            vary[path] = grid_values(path, *slider.value, points.value)
+        return vary
+
+    # ---- running --------------------------------------------------------------------------
+    def start(self) -> None:
+        """Start a study of the current scenario (does nothing while one runs)."""
+        if self.running:
+            return
+        try:
+            vary = self.vary()
+            seeds = self._seed_list()
+            n_runs = int(np.prod([len(v) for v in vary.values()])) * len(seeds)
+            if n_runs > MAX_RUNS_UNCONFIRMED:
+                raise ValueError(
+                    f"{n_runs} runs: at most {MAX_RUNS_UNCONFIRMED} from the dashboard; use "
+                    "fewer points or seeds (or the command line with --yes)"
+                )
+        except ValueError as error:
+            self.status.object = f"**Not started:** {error}"
+            return
+        base = self.scenario_source()
+        self._cancel.clear()
+        self._rows = []
+        self.table = None
+        self.plots.objects, self._slot_names = [], []
+        self.progress.param.update(value=0, max=n_runs)
+        self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
+        self.running = True
+        self.start_button.disabled, self.cancel_button.disabled = True, False
+        if self._doc is None and pn.state.curdoc is not None and pn.state.curdoc.session_context:
+            # a closed browser tab stops its study instead of leaving it to run to the end
+            pn.state.curdoc.on_session_destroyed(lambda context: self._cancel.set())
+        self._doc = pn.state.curdoc
+        work = partial(self._work, base, vary, seeds)
+        if self.threaded:
+            self._thread = threading.Thread(target=work, name="study", daemon=True)
+            self._thread.start()
+        else:
+            work()
+
+    def cancel(self) -> None:
+        """Stop the running study; the finished rows stay."""
+        if self.running:
+            self._cancel.set()
+            self.cancel_button.disabled = True
+            self.status.object = "Cancelling: waiting for the runs in progress…"
+
+    def _seed_list(self) -> list[int]:
+        """The first ``seeds`` irregularity seeds from the scenario's own."""
+        first = self.scenario_source().irregularity.seed
+        return list(range(first, first + self.seeds.value))
+
+    def _work(self, base: Scenario, vary: dict, seeds: list[int]) -> None:
+        """The study (in its own thread when served); hands the outcome to the page."""
+        try:
+            outcome = run_study(
+                base,
+                vary,
+                seeds,
+                scheduler=self.scheduler,
+                depth_profile=True,
+                progress=self._on_row,
+                cancel=self._cancel,
+            )
+        except Exception as error:  # shown on the page; the server must not lose the thread
+            outcome = error
+        self._on_page(partial(self._finish, outcome))
+
+    def _on_row(self, done: int, total: int, row: dict) -> None:
+        """A run came back (study thread): keep it; redraw at most every REFRESH_S, and less
+        often when redrawing is slow, so the event loop stays free for the users."""
+        with self._lock:
+            self._rows.append(row)
+            wait = max(REFRESH_S, self._refresh_seconds / REFRESH_LOAD)
+            due = time.monotonic() - self._last_refresh > wait and not self._refresh_pending
+            if due:
+                self._refresh_pending = True
+        if due:
+            self._on_page(self._refresh)
+
+    def _on_page(self, callback: Callable[[], None]) -> None:
+        """Run ``callback`` on the session's event loop when served, else right here."""
+        doc = self._doc
+        if doc is not None and doc.session_context is not None:
+            doc.add_next_tick_callback(callback)
+        else:
+            callback()
+
+    def _refresh(self) -> None:
+        """Progress, status and plots from the rows so far."""
+        start = time.monotonic()
+        with self._lock:
+            rows = list(self._rows)
+        if rows:
+            table = pd.DataFrame(rows)
+            self.table = table
+            self.progress.value = len(rows)
+            self.status.object = f"{len(rows)} of {self.progress.max} runs done"
+            self._draw(table)
+        with self._lock:
+            self._refresh_pending = False
+            self._last_refresh = time.monotonic()
+            self._refresh_seconds = self._last_refresh - start
+
+    def _draw(self, table: pd.DataFrame) -> None:
+        """Send the table to the plots; build them only when the set of plots changes (a new
+        study), so streaming rows update the figures in place instead of replacing them."""
+        if _finished(table).empty:
+            return
+        slots = plot_slots(table)
+        if list(slots) == self._slot_names:
+            self._pipe.send(table)
+            return
+        self._pipe = Pipe(data=table)
+        self._slot_names = list(slots)
+        self.plots.objects = [
+            pn.pane.HoloViews(
+                hv.DynamicMap(lambda data, draw=draw: draw(data), streams=[self._pipe]),
+                sizing_mode="stretch_width",
+            )
+            for draw in slots.values()
+        ]
+
+    def _finish(self, outcome: pd.DataFrame | Exception) -> None:
+        """The study ended, finished, cancelled or refused: final table and state."""
+        self.running = False
+        self.start_button.disabled, self.cancel_button.disabled = False, True
+        if isinstance(outcome, Exception):
+            message = " ".join(str(outcome).split()) or type(outcome).__name__
+            self.status.object = f"**Study failed:** {message}"
+            return
+        self.table = outcome.reset_index(drop=True)
+        self.progress.value = len(outcome)
+        failed = int((outcome["error"] != "").sum()) if "error" in outcome else 0
+        state = "Cancelled" if outcome.attrs.get("cancelled") else "Done"
+        self.status.object = (
+            f"{state}: {len(outcome)} of {outcome.attrs.get('n_runs', len(outcome))} runs"
+            + (f", {failed} failed" if failed else "")
+        )
+        self._draw(self.table)

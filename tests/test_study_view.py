@@ -1,0 +1,215 @@
+"""The Study view without a browser: choices from the params, grids, plots, start/cancel logic.
+
+The view's own logic is tested with ``run_study`` replaced by the same study run in this
+process (no cluster; the Dask path itself is covered by tests/test_study.py). Plots are checked
+against :func:`model.study.aggregate` of the rows, exactly (same arithmetic, same order).
+"""
+
+from __future__ import annotations
+
+import threading
+
+import holoviews as hv
+import numba
+import numpy as np
+import pandas as pd
+import pytest
+
+from dashboard import study_view
+from dashboard.study_view import (
+    NONE,
+    StudyView,
+    band_plot,
+    grid_values,
+    heat_map,
+    study_parameters,
+    study_plots,
+)
+from model import study as study_module
+from model.params import Scenario
+from model.study import aggregate, define_study, run_summary
+
+
+def _in_process_study(
+    base, vary, seeds, scheduler=None, depth_profile=False, progress=None, cancel=None, **kwargs
+):
+    """run_study's contract (rows streamed, cancel honoured) computed in this thread."""
+    study = define_study(base, vary, seeds, depth_profile=depth_profile)
+    rows, threads = {}, numba.get_num_threads()
+    try:
+        for index, (inputs, scenario_json) in enumerate(study.runs()):
+            if cancel is not None and cancel.is_set():
+                break
+            rows[index] = {**inputs, **run_summary(scenario_json, depth_profile)}
+            progress(len(rows), study.n_runs, rows[index])
+    finally:
+        numba.set_num_threads(threads)  # run_summary limits the calling thread to one
+    cancelled = len(rows) < study.n_runs
+    return study_module._table(study, rows, cancelled)
+
+
+@pytest.fixture
+def view(cheap_scenario, monkeypatch):
+    """A view on the cheap scenario, studies computed in this process and thread."""
+    monkeypatch.setattr(study_view, "run_study", _in_process_study)
+    return StudyView(scenario_source=cheap_scenario, threaded=False)
+
+
+def _choose(view, select, path):
+    select.value = next(label for label, p in view.choices.items() if p == path)
+
+
+def test_choices_are_the_number_parameters_with_their_labels():
+    """Every offered parameter is a number with softbounds, labelled by its param label; the
+    irregularity seed is not offered (it is the seeds input)."""
+    choices = study_parameters()
+    assert choices["Speed (km/h) — train.speed_kmh"] == "train.speed_kmh"
+    assert "irregularity.seed" not in choices.values()
+    assert "train.single_bogie" not in choices.values()
+    assert any(path.startswith("soil.") for path in choices.values())
+
+
+def test_choosing_a_parameter_sets_its_softbounds_as_the_range(view):
+    """Range slider of a chosen parameter: its softbounds and its label; the second parameter's
+    inputs appear only when one is chosen."""
+    _choose(view, view.first, "soil.youngs_modulus")
+    low, high = Scenario.param["soil"].class_.param["youngs_modulus"].softbounds
+    assert view.first_range.value == (low, high)
+    assert (view.first_range.start, view.first_range.end) == (low, high)
+    assert not view.second_range.visible
+    _choose(view, view.second, "train.speed_kmh")
+    assert view.second_range.visible and view.second_range.value == (20.0, 160.0)
+    view.second.value = NONE
+    assert not view.second_range.visible and list(view.vary()) == ["soil.youngs_modulus"]
+
+
+def test_grid_values_are_even_and_whole_for_integers():
+    """linspace for numbers (ends included); distinct rounded values for integer parameters."""
+    assert grid_values("train.speed_kmh", 40.0, 80.0, 5) == [40.0, 50.0, 60.0, 70.0, 80.0]
+    assert grid_values("irregularity.track_class", 1, 6, 11) == [1, 2, 3, 4, 5, 6]
+    assert grid_values("train.speed_kmh", 40.0, 80.0, 1) == [40.0]
+
+
+def test_one_parameter_study_draws_mean_and_band(view):
+    """Start → every run comes back, progress full, the band plot holds aggregate()'s mean and
+    5–95 % band in mm, and the depth envelope bounds every run's profile."""
+    view.first_range.value = (90.0, 100.0)
+    view.first_points.value = 2
+    view.seeds.value = 2
+    view.start()
+    assert not view.running and view.status.object.startswith("Done: 4 of 4 runs")
+    assert view.progress.value == 4 == view.progress.max
+    table = view.table
+    bands = aggregate(table)
+    band, depth = (pane.object[()] for pane in view.plots.objects)
+    area, curve = band.values()
+    np.testing.assert_array_equal(curve.dimension_values(1), bands["peak_disp_invert_m_mean"] * 1e3)
+    np.testing.assert_array_equal(area.dimension_values(1), bands["peak_disp_invert_m_p05"] * 1e3)
+    np.testing.assert_array_equal(area.dimension_values(2), bands["peak_disp_invert_m_p95"] * 1e3)
+    panes = list(view.plots.objects)
+    view._draw(table.iloc[:3])  # fewer rows: same plots, new data, figures kept
+    assert view.plots.objects == panes
+    assert len(panes[0].object[()].values()[1]) == 2 and panes[0].object[()] is not band
+    envelope = next(c for c in depth.values() if c.label == "envelope")
+    profiles = table[[c for c in table if c.startswith("profile_")]].to_numpy() * 1e3
+    np.testing.assert_array_equal(envelope.dimension_values(0), profiles.max(axis=0))
+
+
+def test_two_parameter_study_draws_a_heat_map(view):
+    """Two parameters → a heat map with one cell per grid point holding the seeds' mean."""
+    view.first_range.value = (90.0, 100.0)
+    view.first_points.value = 2
+    _choose(view, view.second, "soil.youngs_modulus")
+    view.second_range.value = (5e6, 1e7)
+    view.second_points.value = 2
+    view.seeds.value = 1
+    view.start()
+    heat = view.plots.objects[0].object[()]
+    assert isinstance(heat, hv.HeatMap)
+    assert len(heat) == 4
+    bands = aggregate(view.table)
+    np.testing.assert_array_equal(
+        np.sort(heat.dimension_values("mean")), np.sort(bands["peak_disp_invert_m_mean"] * 1e3)
+    )
+
+
+def test_long_term_settlement_is_drawn_when_the_key_exists():
+    """A table with ``longterm_settlement_m`` gets its own band plot (synthetic numbers)."""
+    table = pd.DataFrame(
+        {
+            "train.speed_kmh": [60.0, 60.0, 80.0, 80.0],
+            "seed": [1, 2, 1, 2],
+            "peak_disp_invert_m": [1e-3, 2e-3, 3e-3, 4e-3],
+            "longterm_settlement_m": [0.01, 0.02, 0.03, 0.05],
+        }
+    )
+    titles = [plot.opts.get().kwargs.get("title") for plot in study_plots(table)]
+    assert titles == [study_view.RESULTS[k] for k in study_view.RESULTS]
+    plot = band_plot(aggregate(table), "train.speed_kmh", "longterm_settlement_m")
+    np.testing.assert_allclose(plot.values()[1].dimension_values(1), [15.0, 40.0], rtol=1e-12)
+    assert isinstance(
+        heat_map(
+            aggregate(table.assign(**{"soil.density": 1800.0})),
+            "train.speed_kmh",
+            "soil.density",
+            "peak_disp_invert_m",
+        ),
+        hv.HeatMap,
+    )
+
+
+def test_cancel_keeps_the_finished_rows_and_frees_the_buttons(cheap_scenario, monkeypatch):
+    """Threaded: the study waits after its first row, Cancel is pressed, the view ends
+    'Cancelled' with that row, Start enabled, Cancel disabled."""
+    first_row = threading.Event()
+
+    def study_that_waits(*args, progress=None, cancel=None, **kwargs):
+        def progress_then_wait(done, total, row):
+            progress(done, total, row)
+            first_row.set()
+            assert cancel.wait(timeout=60)
+
+        return _in_process_study(*args, progress=progress_then_wait, cancel=cancel, **kwargs)
+
+    monkeypatch.setattr(study_view, "run_study", study_that_waits)
+    view = StudyView(scenario_source=cheap_scenario, threaded=True)
+    view.first_range.value = (90.0, 100.0)
+    view.first_points.value = 2
+    view.seeds.value = 2
+    view.start()
+    assert first_row.wait(timeout=60)
+    assert view.running and view.start_button.disabled and not view.cancel_button.disabled
+    view.start()  # ignored while running
+    view.cancel()
+    view._thread.join(timeout=60)
+    assert not view.running
+    assert view.status.object.startswith("Cancelled: 1 of 4 runs")
+    assert len(view.table) == 1
+    assert not view.start_button.disabled and view.cancel_button.disabled
+
+
+def test_bad_choices_are_refused_before_starting(view, monkeypatch):
+    """The same parameter twice, or more than MAX_RUNS_UNCONFIRMED runs: a message, no study."""
+    monkeypatch.setattr(study_view, "run_study", None)  # would fail if called
+    _choose(view, view.second, "train.speed_kmh")
+    view.start()
+    assert "chosen twice" in view.status.object and not view.running
+    _choose(view, view.second, "soil.youngs_modulus")
+    view.first_points.value = view.second_points.value = 50
+    view.seeds.value = 10
+    view.start()
+    assert "at most" in view.status.object and not view.running
+
+
+def test_a_failed_study_is_shown_not_raised(view, monkeypatch):
+    """An error from the study (e.g. an unreachable scheduler) is a message on the page."""
+
+    def refuse(*args, **kwargs):
+        raise ValueError("cannot reach the Dask scheduler at tcp://127.0.0.1:1")
+
+    monkeypatch.setattr(study_view, "run_study", refuse)
+    view.start()
+    assert view.status.object == (
+        "**Study failed:** cannot reach the Dask scheduler at tcp://127.0.0.1:1"
+    )
+    assert not view.running and not view.start_button.disabled
