@@ -30,15 +30,18 @@ PLOT_HEIGHT = 300  # px
 
 # Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
 # falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
-# framewise: in the dashboard the same plot is updated with new data; its axes must follow.
 _COMMON = {
     "responsive": True,
     "height": PLOT_HEIGHT,
     "tools": ["hover"],
     "show_grid": True,
-    "framewise": True,
     "backend_opts": {"plot.output_backend": "canvas"},
 }
+# In the dashboard the same plot is updated with new data and its axes must follow. framewise
+# is a normalisation option of each element: set on an Overlay it is ignored (the axes of the
+# overlaid plots stayed at the first run's ranges), so every layer carries it.
+_FOLLOW_DATA = {"framewise": True}
+_LEGEND_OUTSIDE = {"legend_position": "right"}  # never over the curves
 
 
 @dataclass(frozen=True)
@@ -88,7 +91,7 @@ def _time_curve(t_s, values, label, value_dim, scale):
     t, v = decimate_min_max(np.asarray(t_s), np.asarray(values) * scale)
     return hv.Curve(
         (t, v), kdims=[hv.Dimension("t", label="Time", unit="s")], vdims=[value_dim], label=label
-    )
+    ).opts(**_FOLLOW_DATA)
 
 
 def block_displacement_plot(results: Results) -> hv.Overlay:
@@ -98,7 +101,7 @@ def block_displacement_plot(results: Results) -> hv.Overlay:
     simulated = _time_curve(vt.t_s, vt.block_disp_m, "Vehicle–track model", disp, MM)
     winkler = _time_curve(vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", disp, MM)
     return (simulated.opts(line_width=1.5) * winkler.opts(line_dash="dashed", line_width=1.5)).opts(
-        title="Sleeper (block) displacement", legend_position="top_right", **_COMMON
+        title="Sleeper (block) displacement", **_LEGEND_OUTSIDE, **_COMMON
     )
 
 
@@ -121,7 +124,7 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
         kdims=[hv.Dimension("f", label="Frequency", unit="Hz")],
         vdims=[value_dim],
         label=label,
-    )
+    ).opts(**_FOLLOW_DATA)
 
 
 def load_psd_plot(results: Results) -> hv.Curve:
@@ -157,7 +160,7 @@ def depth_profile_plot(results: Results, reference: list[dict] | None = None) ->
     layers = [
         hv.Curve(
             (soil.peak_disp_m * MM, soil.depth_m), kdims=[peak], vdims=[depth], label="This model"
-        ).opts(line_width=2)
+        ).opts(line_width=2, **_FOLLOW_DATA)
     ]
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):
@@ -167,12 +170,12 @@ def depth_profile_plot(results: Results, reference: list[dict] | None = None) ->
             vdims=[depth],
             label=series["label"],
         )
-        layers.append(points.opts(marker=marker, size=10))
+        layers.append(points.opts(marker=marker, size=10, **_FOLLOW_DATA))
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        legend_position="bottom_right",
         padding=0.05,
+        **_LEGEND_OUTSIDE,
         **_COMMON,
     )
 
