@@ -45,7 +45,7 @@ def items_html(items: list[plots.SummaryItem], css_class: str) -> str:
 
 ITEMS_CSS = """
 .summary, .soil { display: flex; flex-wrap: wrap; gap: 8px; }
-.item { border: 1px solid #d0d7de; border-radius: 6px; padding: 6px 10px; min-width: 150px; }
+.item { border: 1px solid #d0d7de; border-radius: 6px; padding: 6px 10px; min-width: 120px; }
 .item .label { font-size: 12px; color: #57606a; }
 .item .value { font-size: 18px; font-weight: 600; }
 """

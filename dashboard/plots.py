@@ -41,7 +41,10 @@ _COMMON = {
 # is a normalisation option of each element: set on an Overlay it is ignored (the axes of the
 # overlaid plots stayed at the first run's ranges), so every layer carries it.
 _FOLLOW_DATA = {"framewise": True}
-_LEGEND_OUTSIDE = {"legend_position": "right"}  # never over the curves
+_LEGEND_OUTSIDE = {
+    "legend_position": "bottom",
+    "legend_cols": 3,
+}  # below the axes, never over the curves
 
 
 @dataclass(frozen=True)
