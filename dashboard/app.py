@@ -558,7 +558,8 @@ class Dashboard(pn.viewable.Viewer):
             )
             parts.append(
                 f'<span class="stage-status" data-stage="{stage}" '
-                f'data-renders="{self.render_counts[stage]}">'
+                f'data-renders="{self.render_counts[stage]}" '
+                f'data-seconds="{results.stage_seconds.get(stage, 0.0):.4f}">'
                 f"{_stage_name(stage)}: {took}</span>"
             )
         return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
@@ -577,7 +578,7 @@ class Dashboard(pn.viewable.Viewer):
 def serve_session() -> Dashboard:
     """Build the page of one browser session of ``panel serve`` (the server's shared stage
     cache and warm-up; the session's memory is dropped when it closes)."""
-    cache = pn.state.as_cached("tunnelsettle-stage-cache", StageCache, size=8)
+    cache = pn.state.as_cached("tunnelsettle-stage-cache", StageCache)
     dashboard = Dashboard.from_query(
         pn.state.session_args, cache=cache, warm=warm_up(_warm_up_run), threaded=True
     )

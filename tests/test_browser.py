@@ -126,8 +126,11 @@ def free_port() -> int:
 
 
 @contextlib.contextmanager
-def serve_app(log_path: Path) -> Iterator[str]:
-    """Run ``panel serve dashboard/app.py`` on a free port; yield the app's URL."""
+def serve_app_process(
+    log_path: Path, extra_args: tuple[str, ...] = ()
+) -> Iterator[tuple[str, subprocess.Popen]]:
+    """Run ``panel serve dashboard/app.py --warm`` on a free port; yield the app's URL and the
+    server process."""
     port = free_port()
     command = [
         sys.executable,
@@ -135,12 +138,14 @@ def serve_app(log_path: Path) -> Iterator[str]:
         "panel",
         "serve",
         "dashboard/app.py",
+        "--warm",  # run the app once at start: the kernels compile before the first visitor
         "--port",
         str(port),
         "--address",
         "127.0.0.1",
         "--allow-websocket-origin",
         f"127.0.0.1:{port}",
+        *extra_args,
     ]
     with log_path.open("w") as log:
         process = subprocess.Popen(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
@@ -157,7 +162,7 @@ def serve_app(log_path: Path) -> Iterator[str]:
                 if time.monotonic() > deadline:
                     raise RuntimeError(f"panel serve did not answer: {log_path.read_text()}")
                 time.sleep(0.2)
-            yield f"http://127.0.0.1:{port}/app"
+            yield f"http://127.0.0.1:{port}/app", process
         finally:
             process.terminate()
             try:
@@ -165,6 +170,13 @@ def serve_app(log_path: Path) -> Iterator[str]:
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
+
+
+@contextlib.contextmanager
+def serve_app(log_path: Path) -> Iterator[str]:
+    """Run the dashboard server (:func:`serve_app_process`); yield the app's URL."""
+    with serve_app_process(log_path) as (url, _process):
+        yield url
 
 
 def launch_chromium(playwright):
