@@ -4,6 +4,7 @@ All runs use a cheap scenario (single bogie at 100 km/h, 11 output depths) and t
 pipeline; one stage cache per module keeps repeated stages out of the test time.
 """
 
+import datetime
 import html
 import io
 import json
@@ -21,7 +22,7 @@ from panel.io.state import set_curdoc
 from dashboard import plots
 from dashboard.app import HIDDEN, PRIMARY, SWITCHES, Dashboard
 from dashboard.export import main as export_main
-from dashboard.export import report_html
+from dashboard.export import package_version, report_html
 from model import scenarios
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.pipeline import StageCache, run
@@ -496,6 +497,13 @@ def test_report_is_self_contained_and_complete(results):
     for item in plots.summary_items(results):
         assert f'data-key="{item.key}">{item.text}<' in shown
     assert html.escape(results.scenario_json) in shown  # the full scenario, as <pre> text
+
+
+def test_report_header_names_the_scenario_date_and_version(results):
+    shown = "".join(_markup_texts(report_html(results, scenario_name="single_bogie")))
+    today = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d")
+    assert "Scenario: <b>single_bogie</b>" in shown
+    assert today in shown and f"tunnelsettle {package_version()}" in shown
 
 
 def test_report_download_button_serves_the_report(dashboard):
