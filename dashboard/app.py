@@ -1,11 +1,13 @@
-"""Interactive dashboard: ``panel serve dashboard/app.py``, then open http://localhost:5006/app.
+"""Interactive dashboard: ``panel serve dashboard/app.py --warm``, then open
+http://localhost:5006/app.
 
-Thin by design: every widget is generated from the parameter objects of :mod:`model.params`
-(label, unit, range, default and doc all come from there), every number comes from
-:func:`model.pipeline.run` and every plot from :mod:`dashboard.plots`.
+The wiring layer only: controls come from the parameters (:mod:`dashboard.controls`), presets,
+train types and URL overrides from :mod:`model.scenarios`, run scheduling from
+:mod:`dashboard.scheduler`, numbers from :func:`model.pipeline.run` and plots from
+:mod:`dashboard.plots`. ``--warm`` compiles the kernels when the server starts.
 
 URL query arguments choose the initial scenario: ``?preset=single_bogie`` and any number of
-``section.parameter=value`` overrides, e.g. ``?preset=paper&train.speed_kmh=60``.
+``section.parameter=value`` overrides in SI units, e.g. ``?preset=paper&train.speed_kmh=60``.
 """
 
 from __future__ import annotations
@@ -13,12 +15,9 @@ from __future__ import annotations
 import asyncio
 import html
 import io
-import json
 import logging
-import math
 import re
-from concurrent.futures import ThreadPoolExecutor
-from functools import partial
+from concurrent.futures import Executor, Future
 
 import holoviews as hv
 import panel as pn
@@ -26,21 +25,20 @@ import param
 from holoviews.streams import Pipe
 
 from dashboard import plots
+from dashboard.controls import ParameterControl
 from dashboard.export import ITEMS_CSS, items_html, report_html
-from model.params import PRESETS_FILE, SECTIONS, Scenario, ScenarioError, Train
-from model.pipeline import (
-    STAGES,
-    Results,
-    SimulationError,
-    StageCache,
-    run,
-    stage_keys,
-)
+from dashboard.scheduler import EXECUTOR, LatestRun, warm_up
+from model import scenarios
+from model.params import SECTIONS, Scenario, ScenarioError
+from model.pipeline import STAGES, Results, SimulationError, StageCache, run, stage_keys
 
 log = logging.getLogger(__name__)
 
 PRIMARY = ("train.speed_kmh", "soil.youngs_modulus", "track.fastener_stiffness")
-"""Controls shown up front; every other parameter sits in its section's collapsible group."""
+"""Main inputs, shown up front; every other parameter sits in its section's collapsible group."""
+
+SWITCHES = ("tunnel.model",)
+"""Model switches shown up front with the presets."""
 
 GROUP_TITLES = {
     "train": "Train",
@@ -49,79 +47,37 @@ GROUP_TITLES = {
     "soil": "Soil",
     "tunnel": "Lining",
     "vehicle": "Vehicle",
-    "numerics": "Numerics",
     "longterm": "Long-term settlement",
+    "numerics": "Numerics",
 }
 """Collapsible groups in display order: section → title."""
 
 HIDDEN = {"irregularity.profile_csv"}
-"""Not offered as a widget: a measured profile is a server-side file; set it in a scenario file."""
+"""Not offered as a control: a measured profile is a server-side file; set it in a scenario file."""
 
-TRAIN_TYPES = {"Type A": Train.type_a(), "Type B": Train.type_b()}
-TRAIN_GEOMETRY = ("car_length", "bogie_distance", "wheelbase")
-CUSTOM = "Custom"
-DEFAULT_PRESET = "paper"  # Scenario.paper(): the paper's Nanjing case
+STAGE_NAMES = {"vehicle_track": "vehicle–track", "longterm": "long-term settlement"}
+"""Stage names as shown, where they differ from the pipeline's."""
 
-STAGE_NAMES = {
-    "vehicle_track": "vehicle–track",
-    "load": "load",
-    "soil": "soil",
-    "stress": "stresses",
-    "longterm": "long-term settlement",
-}
-POLL_S = 0.1  # how often the page's progress bar is refreshed while a run computes
+PREPARING = (
+    '<span class="preparing">Preparing the model: the numerical kernels are being compiled '
+    "(first start of the server only; about a minute)…</span>"
+)
 
-# One worker: runs from all sessions queue instead of fighting over two cores.
-_EXECUTOR = ThreadPoolExecutor(max_workers=1, thread_name_prefix="pipeline")
+WARM_UP_PRESET = "single_bogie"
 
 
-def _slider_step(low: float, high: float) -> float:
-    """A round step giving at least 200 positions between ``low`` and ``high``."""
-    return 10.0 ** math.floor(math.log10((high - low) / 200.0))
-
-
-def parameter_widget(scenario: Scenario, path: str) -> pn.widgets.Widget:
-    """Widget for one parameter (``"section.name"``), from its label, doc, softbounds and value.
-
-    Numbers get an editable slider over their soft bounds whose text box accepts any value
-    (the parameter itself refuses what is out of its hard bounds); optional numbers get a text
-    box where empty means "automatic". The widget has the CSS class ``param-section-name``.
-    """
-    section, _, name = path.partition(".")
-    obj = getattr(scenario, section)
-    p = obj.param[name]
-    value = getattr(obj, name)
-    if isinstance(p, param.Boolean):
-        cls, kwargs = pn.widgets.Checkbox, {}
-    elif isinstance(p, param.Selector):
-        cls, kwargs = pn.widgets.Select, {"options": list(p.objects)}
-    elif isinstance(p, param.Number) and not p.allow_None and p.softbounds is not None:
-        low, high = p.softbounds
-        kwargs = {"start": min(low, value), "end": max(high, value)}
-        if isinstance(p, param.Integer):
-            cls, kwargs["step"] = pn.widgets.EditableIntSlider, 1
-        else:
-            cls, kwargs["step"] = pn.widgets.EditableFloatSlider, _slider_step(low, high)
-    else:
-        cls = pn.widgets.TextInput
-        kwargs = {"placeholder": "automatic" if p.allow_None else ""}
-        value = "" if value is None else str(value)
-    if "description" in cls.param:  # sliders and checkboxes have no tooltip
-        kwargs["description"] = p.doc
-    return cls(
-        label=p.label,
-        value=value,
-        sizing_mode="stretch_width",
-        css_classes=[f"param-{section}-{name}"],
-        **kwargs,
-    )
+def _warm_up_run() -> None:
+    """One cheap run: compiles (or loads from Numba's cache) every kernel of the pipeline."""
+    scenario = Scenario.preset(WARM_UP_PRESET)
+    scenario.numerics.n_depths = 11
+    run(scenario, cache=None)
 
 
 def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
     """A collapsed card whose contents are rendered only when it is first opened.
 
-    Rendering every group's ~50 widgets up front (each editable slider carries a JavaScript
-    link) costs seconds of page load; most sessions never open most groups.
+    Rendering every group's ~50 controls up front costs seconds of page load; most sessions
+    never open most groups.
     """
     card = pn.Card(collapsed=True, sizing_mode="stretch_width", **params)
 
@@ -131,20 +87,6 @@ def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
 
     card.param.watch(fill, "collapsed")
     return card
-
-
-def _dynamic(draw):
-    """DynamicMap callback drawing the Results a Pipe stream carries."""
-
-    def callback(data):
-        return draw(data)
-
-    return callback
-
-
-def _widget_value_event(widget: pn.widgets.Widget) -> str:
-    """The widget parameter that signals a finished edit (slider release, Enter, blur)."""
-    return "value_throttled" if "value_throttled" in widget.param else "value"
 
 
 def _markdown_escape(text: str) -> str:
@@ -157,74 +99,93 @@ def _note_html(text: str) -> str:
     return f'<div style="font-size: 12px; color: #57606a">{html.escape(text)}</div>'
 
 
-def _preset_descriptions() -> dict[str, str]:
-    """Description of every preset, from ``model/data/presets.json``."""
-    presets = json.loads(PRESETS_FILE.read_text(encoding="utf-8"))["presets"]
-    return {name: entry.get("description", "") for name, entry in presets.items()}
+def _dynamic(draw):
+    """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``)."""
+
+    def callback(data):
+        return draw(data)
+
+    return callback
+
+
+def _stage_name(stage: str) -> str:
+    return STAGE_NAMES.get(stage, stage)
 
 
 class Dashboard(pn.viewable.Viewer):
-    """The dashboard of one browser session: controls, plots, key numbers and export.
+    """The dashboard of one browser session: controls, views of the results, export.
 
     Parameters
     ----------
     scenario : Scenario, optional
-        Initial inputs (default: the ``paper`` preset).
+        Initial inputs (default: the ``paper`` preset). The dashboard edits this object.
     preset : str, optional
         Name shown in the preset selector.
-    threaded : bool
-        Compute off the event loop (served app) instead of in the calling thread (tests).
     cache : StageCache, optional
-        Stage cache shared by runs, so only the stages a change touches re-run (default: a
-        new one owned by this dashboard).
+        Stage cache of the runs (the served app passes one shared by its sessions); a new one
+        by default.
+    executor : Executor
+        Where runs compute (default: the process-wide pool of :mod:`dashboard.scheduler`).
+    warm : Future, optional
+        The server's warm-up run; while it computes, the page says the model is being prepared.
+    threaded : bool
+        Compute without blocking the event loop (served app) instead of before returning.
     """
 
-    threaded = param.Boolean(default=False, doc="Run the pipeline in a worker thread.")
+    threaded = param.Boolean(default=False, doc="Run the pipeline without blocking the caller.")
 
     def __init__(
         self,
         scenario: Scenario | None = None,
-        preset: str = DEFAULT_PRESET,
+        preset: str = scenarios.DEFAULT_PRESET,
         cache: StageCache | None = None,
+        executor: Executor = EXECUTOR,
+        warm: Future | None = None,
         **params,
     ):
         super().__init__(**params)
         self.scenario = scenario if scenario is not None else Scenario.preset(preset)
         self.cache = cache if cache is not None else StageCache()
+        self.warm = warm
         self.results: Results | None = None
         self.render_counts = dict.fromkeys(STAGES, 0)
+        self.runs = LatestRun(self._compute, executor)
         self._shown_keys: dict[str, str] = {}
-        self._running = False
-        self._pending = False
-        self._syncing = False
         self._progress_state = ("", 0.0)
+        self._replacing = False
+        self._quiet = False
+        self._refused: dict[str, str] = {}
 
-        self.widgets = {
-            f"{section}.{name}": parameter_widget(self.scenario, f"{section}.{name}")
+        self.controls = {
+            f"{section}.{name}": ParameterControl(obj, f"{section}.{name}", self._on_refusal)
             for section in SECTIONS
-            for name in getattr(self.scenario, section).param
+            for obj in [getattr(self.scenario, section)]
+            for name in obj.param
             if name != "name" and f"{section}.{name}" not in HIDDEN
         }
-        for path, widget in self.widgets.items():
-            widget.param.watch(partial(self._on_edit, path), _widget_value_event(widget))
+        for section in SECTIONS:
+            obj = getattr(self.scenario, section)
+            obj.param.watch(self._on_parameter, [n for n in obj.param if n != "name"])
 
-        descriptions = _preset_descriptions()
+        self._preset_descriptions = scenarios.preset_descriptions()
         self.preset_select = pn.widgets.Select(
             label="Preset",
-            options=list(descriptions),
+            options=[*self._preset_descriptions, scenarios.CUSTOM],
             value=preset,
-            description="Named scenario; choosing one replaces every input.",
+            description="Named scenario; choosing one replaces every input. Shows "
+            f"'{scenarios.CUSTOM}' once an input differs from every preset.",
             sizing_mode="stretch_width",
         )
         self.preset_select.param.watch(self._on_preset, "value")
-        self._preset_descriptions = descriptions
         self.preset_note = pn.pane.HTML(
-            _note_html(descriptions.get(preset, "")), margin=(0, 10), sizing_mode="stretch_width"
+            _note_html(self._preset_descriptions.get(preset, "")),
+            margin=(0, 10),
+            sizing_mode="stretch_width",
         )
         self.train_type = pn.widgets.Select(
             label="Train type",
-            options=[*TRAIN_TYPES, CUSTOM],
-            value=self._train_type(),
+            options=[*scenarios.TRAIN_TYPES, scenarios.CUSTOM],
+            value=scenarios.train_type_of(self.scenario.train),
             description="Car length, bogie-centre distance and wheelbase of a standard "
             "Chinese metro car.",
             sizing_mode="stretch_width",
@@ -268,10 +229,23 @@ class Dashboard(pn.viewable.Viewer):
                 sizing_mode="stretch_width",
                 loading=True,
                 min_height=plots.PLOT_HEIGHT,
+                min_width=360,
+                styles={"flex": "1 1 440px"},
                 css_classes=["plot", f"plot-{spec.key}", f"stage-{spec.stage}"],
             )
             for spec in plots.PLOTS
         }
+        self.views: dict[str, pn.viewable.Viewable] = {
+            "Passage": pn.Column(
+                self.summary,
+                self.soil_summary,
+                pn.FlexBox(*self.plot_panes.values(), sizing_mode="stretch_width"),
+                sizing_mode="stretch_width",
+                name="Passage",
+            )
+        }
+        """Main-area views by tab title; :meth:`add_view` adds one."""
+        self.tabs = pn.Tabs(*self.views.items(), sizing_mode="stretch_width", dynamic=True)
 
         self.save_button = pn.widgets.FileDownload(
             callback=self._scenario_file,
@@ -301,38 +275,34 @@ class Dashboard(pn.viewable.Viewer):
         A bad argument is reported in the page, not raised.
         """
         decoded = {key: values[-1].decode("utf-8", "replace") for key, values in args.items()}
-        names = Scenario.preset_names()
-        preset = decoded.pop("preset", DEFAULT_PRESET)
-        problems = []
-        if preset not in names:
-            problems.append(f"unknown preset {preset!r}; available: {', '.join(names)}")
-            preset = DEFAULT_PRESET
-        scenario = Scenario.preset(preset)
-        for path, value in decoded.items():
-            if "." not in path:
-                continue
-            try:
-                scenario.set_value(path, value)
-            except (KeyError, ValueError) as error:
-                problems.append(_error_text(error))
+        preset, scenario, problems = scenarios.scenario_from_arguments(decoded)
         dashboard = cls(scenario=scenario, preset=preset, **params)
+        dashboard._set_quietly(dashboard.preset_select, scenarios.matching_preset(scenario))
         if problems:
             dashboard._show_error("Ignored URL arguments:", problems)
         return dashboard
 
     # ---- layout ---------------------------------------------------------------------------
+    def add_view(self, title: str, view: pn.viewable.Viewable) -> None:
+        """Add a tab to the main area (e.g. long-term settlement, studies)."""
+        self.views[title] = view
+        self.tabs.append((title, view))
+
     def sidebar(self) -> list[pn.viewable.Viewable]:
-        """Sidebar contents: preset, primary controls, collapsible groups, files."""
-        groups = []
-        for section, title in GROUP_TITLES.items():
-            members = [
-                widget
-                for path, widget in self.widgets.items()
-                if path.startswith(f"{section}.") and path not in PRIMARY
-            ]
-            if section == "train":
-                members.insert(0, self.train_type)
-            groups.append(_lazy_card(members, title=title, css_classes=[f"group-{section}"]))
+        """Sidebar: preset, model switch, train type and main inputs; the rest in groups."""
+        up_front = {*PRIMARY, *SWITCHES}
+        groups = [
+            _lazy_card(
+                [
+                    control
+                    for path, control in self.controls.items()
+                    if path.startswith(f"{section}.") and path not in up_front
+                ],
+                title=title,
+                css_classes=[f"group-{section}"],
+            )
+            for section, title in GROUP_TITLES.items()
+        ]
         files = pn.Card(
             self.save_button,
             pn.pane.Markdown("Load a scenario file:", margin=(0, 5)),
@@ -344,32 +314,31 @@ class Dashboard(pn.viewable.Viewer):
         return [
             self.preset_select,
             self.preset_note,
-            *[self.widgets[path] for path in PRIMARY],
+            *[self.controls[path] for path in SWITCHES],
+            self.train_type,
+            *[self.controls[path] for path in PRIMARY],
             *groups,
             files,
             self.report_button,
         ]
 
     def main(self) -> list[pn.viewable.Viewable]:
-        """Main-area contents: run status, messages, key numbers, plots."""
-        plots_grid = pn.GridBox(*self.plot_panes.values(), ncols=2, sizing_mode="stretch_width")
+        """Main area: run status and messages above the tabs of views."""
         return [
             pn.Column(
                 self.progress,
                 self.status,
                 self.error_alert,
                 self.warning_alert,
-                self.summary,
-                self.soil_summary,
-                plots_grid,
+                self.tabs,
                 sizing_mode="stretch_width",
             )
         ]
 
     def __panel__(self) -> pn.viewable.Viewable:
         return pn.Row(
-            pn.Column(*self.sidebar(), width=340),
-            pn.Column(*self.main()),
+            pn.Column(*self.sidebar(), width=320),
+            pn.Column(*self.main(), sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )
 
@@ -380,46 +349,51 @@ class Dashboard(pn.viewable.Viewer):
             title="tunnelsettle — metro tunnel settlement under passing trains",
             sidebar=self.sidebar(),
             main=self.main(),
-            sidebar_width=380,
+            sidebar_width=320,
             header_background="#1f6f8b",
         )
 
+    def close(self) -> None:
+        """Drop the results and plots of a closed session (its memory returns at once)."""
+        for pane in self.plot_panes.values():
+            pane.object = None
+        self.plot_streams.clear()
+        self.results = None
+
     # ---- editing ----------------------------------------------------------------------------
-    def _on_edit(self, path: str, event: param.parameterized.Event) -> None:
-        """A control changed: set the parameter (refusing bad values clearly) and re-run."""
-        if self._syncing:
+    def _on_parameter(self, *events: param.parameterized.Event) -> None:
+        """An input changed (control, train type): follow-up displays, then a new run."""
+        if self._replacing:
             return
-        value = event.new
-        if isinstance(value, str) and not value.strip():
-            value = "none"  # an emptied optional field means "automatic"
-        try:
-            self.scenario.set_value(path, value)
-        except (KeyError, ValueError) as error:
-            self._show_error("Value not accepted:", [_error_text(error)])
-            self._sync_widgets()
-            return
-        self._clear_error()
-        if path.startswith("soil."):
-            self._update_soil_summary()
-        if path.startswith("train."):
-            self._set_quietly(self.train_type, self._train_type())
+        self._after_change()
+
+    def _after_change(self) -> None:
+        """Derived displays follow the inputs; a run is requested."""
+        self._update_soil_summary()
+        self._set_quietly(self.preset_select, scenarios.matching_preset(self.scenario))
+        self._set_quietly(self.train_type, scenarios.train_type_of(self.scenario.train))
         self.refresh()
+
+    def _on_refusal(self, path: str, message: str | None) -> None:
+        """A control refused an edit (message) or accepted one (None)."""
+        if message is None:
+            if self._refused.pop(path, None) is not None or not self._refused:
+                self._clear_error()
+            return
+        self._refused[path] = message
+        self._show_error("Value not accepted:", [message])
 
     def _on_preset(self, event: param.parameterized.Event) -> None:
         """Replace every input by the chosen preset's."""
-        if self._syncing:
+        if self._quiet or event.new == scenarios.CUSTOM:
             return
         self.preset_note.object = _note_html(self._preset_descriptions.get(event.new, ""))
         self._replace_scenario(Scenario.preset(event.new))
 
     def _on_train_type(self, event: param.parameterized.Event) -> None:
         """Apply the geometry of a standard train type."""
-        if self._syncing or event.new == CUSTOM:
-            return
-        train = TRAIN_TYPES[event.new]
-        self.scenario.train.param.update({name: getattr(train, name) for name in TRAIN_GEOMETRY})
-        self._sync_widgets()
-        self.refresh()
+        if not self._quiet and event.new != scenarios.CUSTOM:
+            scenarios.apply_train_type(self.scenario, event.new)
 
     def _on_load(self, event: param.parameterized.Event) -> None:
         """Load a scenario file written by "Save scenario"; a bad file gives a clear message."""
@@ -430,50 +404,30 @@ class Dashboard(pn.viewable.Viewer):
         try:
             scenario = Scenario.from_json(event.new.decode("utf-8"))
         except (ValueError, KeyError, TypeError, AttributeError) as error:
-            self._show_error(f"Could not load {filename} as a scenario:", [_error_text(error)])
+            self._show_error(
+                f"Could not load {filename} as a scenario:", [scenarios.error_text(error)]
+            )
             return
         self._replace_scenario(scenario)
 
     def _replace_scenario(self, scenario: Scenario) -> None:
-        """Adopt a whole new scenario: widgets follow, then re-run."""
-        self.scenario = scenario
+        """Adopt every input of ``scenario`` (controls follow), then one run."""
+        self._replacing = True
+        try:
+            self.scenario.update(scenario.to_dict())
+        finally:
+            self._replacing = False
+        self._refused.clear()
         self._clear_error()
-        self._sync_widgets()
-        self._update_soil_summary()
-        self.refresh()
-
-    def _train_type(self) -> str:
-        """Name of the standard train whose geometry the scenario has, or "Custom"."""
-        train = self.scenario.train
-        for label, standard in TRAIN_TYPES.items():
-            if all(getattr(train, n) == getattr(standard, n) for n in TRAIN_GEOMETRY):
-                return label
-        return CUSTOM
+        self._after_change()
 
     def _set_quietly(self, widget: pn.widgets.Widget, value) -> None:
-        """Set a widget without triggering the edit callbacks."""
-        self._syncing = True
+        """Set a selector without treating it as the user's choice."""
+        self._quiet = True
         try:
-            if "value_throttled" in widget.param:
-                # keep value_throttled in step too, so re-entering the same value is an event
-                with param.edit_constant(widget):
-                    widget.param.update(value=value, value_throttled=value)
-            else:
-                widget.value = value
+            widget.value = value
         finally:
-            self._syncing = False
-
-    def _sync_widgets(self) -> None:
-        """Make every widget show the scenario's current values."""
-        for path, widget in self.widgets.items():
-            section, _, name = path.partition(".")
-            value = getattr(getattr(self.scenario, section), name)
-            if isinstance(widget, pn.widgets.TextInput):
-                value = "" if value is None else str(value)
-            elif hasattr(widget, "start"):
-                widget.param.update(start=min(widget.start, value), end=max(widget.end, value))
-            self._set_quietly(widget, value)
-        self._set_quietly(self.train_type, self._train_type())
+            self._quiet = False
 
     # ---- messages ---------------------------------------------------------------------------
     def _show_error(self, headline: str, messages: list[str]) -> None:
@@ -493,45 +447,26 @@ class Dashboard(pn.viewable.Viewer):
     def refresh(self) -> None:
         """Bring the results up to date with the scenario.
 
-        Changes made while a run computes are coalesced into one further run, so dragging or
-        typing never queues duplicate runs.
+        A change made while a run computes replaces any change still waiting, so dragging or
+        typing never queues stale runs.
         """
-        if self._running:
-            self._pending = True
+        if not self.runs.request(self.scenario.copy()):
             return
-        self._running = True
         if self.threaded:
-            pn.state.execute(self._run_in_worker)
-            return
-        try:
-            self._finish(self._compute(self.scenario.copy(), self._note_progress))
-        finally:
-            self._running = False
+            pn.state.execute(self._drain)
+        else:
+            asyncio.run(self._drain())
 
-    async def _run_in_worker(self) -> None:
-        """Run the pipeline in the worker thread, refreshing the progress bar meanwhile."""
-        loop = asyncio.get_running_loop()
-        try:
-            while True:
-                self._pending = False
-                scenario = self.scenario.copy()
-                self._start(scenario)
-                future = loop.run_in_executor(
-                    _EXECUTOR, partial(self._compute, scenario, self._note_progress)
-                )
-                while not future.done():
-                    await asyncio.wait([future], timeout=POLL_S)
-                    self._show_progress()
-                self._finish(future.result())
-                if not self._pending:
-                    break
-        finally:
-            self._running = False
+    async def _drain(self) -> None:
+        """Compute the requested runs, refreshing the progress bar meanwhile."""
+        await self.runs.drain(self._start, self._finish, tick=self._show_progress)
 
     def _start(self, scenario: Scenario) -> None:
         """Mark the plots that this run will change as loading."""
         self._progress_state = ("", 0.0)
         self.progress.param.update(value=0, visible=True, active=True)
+        if self.warm is not None and not self.warm.done():
+            self.status.object = PREPARING
         stale = self._stale_stages(scenario)
         for spec in plots.PLOTS:
             if spec.stage in stale:
@@ -543,7 +478,7 @@ class Dashboard(pn.viewable.Viewer):
         return {stage for stage in STAGES if self._shown_keys.get(stage) != keys[stage]}
 
     def _note_progress(self, stage: str, fraction: float) -> None:
-        """Pipeline progress callback (may run in the worker thread): just remember it."""
+        """Pipeline progress callback (runs in a worker thread): just remember it."""
         self._progress_state = (stage, fraction)
 
     def _show_progress(self) -> None:
@@ -553,36 +488,20 @@ class Dashboard(pn.viewable.Viewer):
             overall = (STAGES.index(stage) + fraction) / len(STAGES)
             self.progress.value = round(100 * overall)
             self.status.object = (
-                f'<span class="computing">Computing {STAGE_NAMES[stage]}… {fraction:.0%}</span>'
+                f'<span class="computing">Computing {_stage_name(stage)}… {fraction:.0%}</span>'
             )
 
-    def _compute(self, scenario: Scenario, progress) -> Results | Exception:
-        """Run the pipeline; a failure is returned (to be shown), not raised."""
-        try:
-            return run(scenario, progress=progress, cache=self.cache)
-        except (ValueError, KeyError, SimulationError) as error:  # ScenarioError: ValueError
-            return error
-        except Exception as error:  # shown in the page; the traceback goes to the server log
-            log.exception("pipeline run failed")
-            return error
+    def _compute(self, scenario: Scenario) -> Results:
+        """Run the pipeline with the app's cache (in a worker thread)."""
+        if self.warm is not None:
+            self.warm.result()  # the kernels compile once, not once per waiting session
+        return run(scenario, progress=self._note_progress, cache=self.cache)
 
-    def _finish(self, outcome: Results | Exception) -> None:
+    def _finish(self, scenario: Scenario, outcome: Results | BaseException) -> None:
         """Show a run's results (redrawing only the plots whose stage changed) or its error."""
         self.progress.param.update(visible=False, active=False)
-        if isinstance(outcome, Exception):
-            headline = (
-                "Inconsistent inputs:"
-                if isinstance(outcome, ScenarioError)
-                else "The computation failed:"
-            )
-            self._show_error(headline, [_error_text(outcome)])
-            for pane in self.plot_panes.values():
-                pane.loading = False
-            self.status.object = (
-                '<span class="failed">Last run failed; the plots show the previous results.</span>'
-                if self.results
-                else ""
-            )
+        if isinstance(outcome, BaseException):
+            self._show_failure(outcome)
             return
         results = outcome
         redrawn = self._stale_stages(results.scenario)
@@ -611,6 +530,23 @@ class Dashboard(pn.viewable.Viewer):
         self.status.object = self._status_html(results)
         self.report_button.disabled = False
 
+    def _show_failure(self, error: BaseException) -> None:
+        """A failed run: its message in the page, the previous results kept."""
+        if isinstance(error, ScenarioError):
+            headline = "Inconsistent inputs:"
+        else:
+            headline = "The computation failed:"
+            if not isinstance(error, ValueError | KeyError | SimulationError):
+                log.error("pipeline run failed", exc_info=error)
+        self._show_error(headline, [scenarios.error_text(error)])
+        for pane in self.plot_panes.values():
+            pane.loading = False
+        self.status.object = (
+            '<span class="failed">Last run failed; the plots show the previous results.</span>'
+            if self.results
+            else ""
+        )
+
     def _status_html(self, results: Results) -> str:
         """Which stages re-ran and how long they took; render counters for the browser tests."""
         parts = []
@@ -622,8 +558,9 @@ class Dashboard(pn.viewable.Viewer):
             )
             parts.append(
                 f'<span class="stage-status" data-stage="{stage}" '
-                f'data-renders="{self.render_counts[stage]}">'
-                f"{STAGE_NAMES[stage]}: {took}</span>"
+                f'data-renders="{self.render_counts[stage]}" '
+                f'data-seconds="{results.stage_seconds.get(stage, 0.0):.4f}">'
+                f"{_stage_name(stage)}: {took}</span>"
             )
         return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
 
@@ -634,18 +571,23 @@ class Dashboard(pn.viewable.Viewer):
 
     def _report_file(self) -> io.BytesIO:
         """Static HTML report of the results on screen."""
-        return io.BytesIO(report_html(self.results).encode("utf-8"))
+        name = self.preset_select.value
+        return io.BytesIO(report_html(self.results, scenario_name=name).encode("utf-8"))
 
 
-def _error_text(error: BaseException) -> str:
-    """The message of an exception (KeyError quotes its argument otherwise)."""
-    if isinstance(error, KeyError) and error.args:
-        return str(error.args[0])
-    return str(error) or type(error).__name__
+def serve_session() -> Dashboard:
+    """Build the page of one browser session of ``panel serve`` (the server's shared stage
+    cache and warm-up; the session's memory is dropped when it closes)."""
+    cache = pn.state.as_cached("tunnelsettle-stage-cache", StageCache)
+    dashboard = Dashboard.from_query(
+        pn.state.session_args, cache=cache, warm=warm_up(_warm_up_run), threaded=True
+    )
+    pn.state.onload(dashboard.refresh)
+    pn.state.on_session_destroyed(lambda _context: dashboard.close())
+    dashboard.template().servable()
+    return dashboard
 
 
 if pn.state.served:
     pn.extension(notifications=False)
-    _dashboard = Dashboard.from_query(pn.state.session_args, threaded=True)
-    pn.state.onload(_dashboard.refresh)
-    _dashboard.template().servable()
+    serve_session()

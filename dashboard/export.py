@@ -9,7 +9,9 @@ All JavaScript and CSS are inlined, so the file opens offline. Command line::
 from __future__ import annotations
 
 import argparse
+import datetime
 import html
+import importlib.metadata
 import io
 import sys
 from pathlib import Path
@@ -24,6 +26,7 @@ from panel.io.state import set_curdoc
 from dashboard import plots
 from model.__main__ import add_scenario_arguments, load_scenario
 from model.pipeline import Results, SimulationError, run
+from model.scenarios import CUSTOM, matching_preset
 
 REPORT_TITLE = "tunnelsettle report"
 # Panel's page template links its favicons from a CDN; empty values keep the file offline.
@@ -42,15 +45,33 @@ def items_html(items: list[plots.SummaryItem], css_class: str) -> str:
 
 ITEMS_CSS = """
 .summary, .soil { display: flex; flex-wrap: wrap; gap: 8px; }
-.item { border: 1px solid #d0d7de; border-radius: 6px; padding: 6px 10px; min-width: 150px; }
+.item { border: 1px solid #d0d7de; border-radius: 6px; padding: 6px 10px; min-width: 120px; }
 .item .label { font-size: 12px; color: #57606a; }
 .item .value { font-size: 18px; font-weight: 600; }
 """
 """Style of :func:`items_html` blocks, shared by the dashboard and the report."""
 
 
-def build_report(results: Results) -> pn.Column:
-    """Panel layout of the report: summary, warnings, every plot and the full scenario JSON."""
+def package_version() -> str:
+    """Installed version of tunnelsettle, or "not installed" when run from a source tree."""
+    try:
+        return importlib.metadata.version("tunnelsettle")
+    except importlib.metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def report_header(scenario_name: str, when: datetime.datetime | None = None) -> str:
+    """HTML line naming the scenario, the date (UTC) and the program's version."""
+    when = when or datetime.datetime.now(datetime.UTC)
+    return (
+        f'<p class="report-meta">Scenario: <b>{html.escape(scenario_name)}</b> · '
+        f"{when:%Y-%m-%d %H:%M} UTC · tunnelsettle {html.escape(package_version())}</p>"
+    )
+
+
+def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
+    """Panel layout of the report: header (scenario name, date, version), summary, warnings,
+    every plot and the full scenario JSON."""
     scenario = results.scenario
     warnings = "".join(f"<li>{html.escape(w)}</li>" for w in results.warnings)
     warning_block = (
@@ -58,7 +79,8 @@ def build_report(results: Results) -> pn.Column:
     )
     header = pn.pane.HTML(
         f"<h1>{REPORT_TITLE}</h1>"
-        "<p>Train → track → tunnel → soil: peak dynamic displacement below a metro tunnel in "
+        + report_header(scenario_name)
+        + "<p>Train → track → tunnel → soil: peak dynamic displacement below a metro tunnel in "
         "soft soil. Displacements are positive downward.</p>"
         "<h3>Key numbers</h3>"
         + items_html(plots.summary_items(results), "summary")
@@ -95,13 +117,13 @@ def _packaged_stylesheet(sheet):
     return InlineStyleSheet(css=path.read_text(encoding="utf-8")) if path.exists() else sheet
 
 
-def report_html(results: Results) -> str:
+def report_html(results: Results, scenario_name: str = "custom") -> str:
     """The report as one self-contained HTML document (inline JS and CSS)."""
     document = Document()
     # A document of its own even inside a served session (Panel caches stylesheet models per
     # current document), with stylesheet links in CDN form, whatever the session uses.
     with set_curdoc(document), set_resource_mode("cdn"):
-        root = build_report(results).get_root(document)
+        root = build_report(results, scenario_name).get_root(document)
     document.add_root(root)
     # INLINE resources inline the JavaScript but Panel still links component stylesheets from
     # its CDN (holoviz/panel#6759); swap them for the packaged files so the file works offline.
@@ -120,10 +142,10 @@ def report_html(results: Results) -> str:
     return buffer.getvalue()
 
 
-def write_report(results: Results, path: Path) -> Path:
+def write_report(results: Results, path: Path, scenario_name: str = "custom") -> Path:
     """Write :func:`report_html` to ``path`` (UTF-8) and return the path."""
     path = Path(path)
-    path.write_text(report_html(results), encoding="utf-8")
+    path.write_text(report_html(results, scenario_name), encoding="utf-8")
     return path
 
 
@@ -143,8 +165,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        results = run(load_scenario(args), cache=None)
-        write_report(results, args.out)
+        scenario = load_scenario(args)
+        results = run(scenario, cache=None)
+        name = matching_preset(scenario)
+        if name == CUSTOM and args.scenario:
+            name = args.scenario.name
+        write_report(results, args.out, name)
     except (ValueError, KeyError, OSError, SimulationError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         parser.exit(2, f"error: {message}\n")

@@ -8,7 +8,7 @@ reader expects (mm, kN, kN/m) and every axis label states its unit.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -31,15 +31,21 @@ PLOT_HEIGHT = 300  # px
 
 # Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
 # falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
-# framewise: in the dashboard the same plot is updated with new data; its axes must follow.
 _COMMON = {
     "responsive": True,
     "height": PLOT_HEIGHT,
     "tools": ["hover"],
     "show_grid": True,
-    "framewise": True,
     "backend_opts": {"plot.output_backend": "canvas"},
 }
+# In the dashboard the same plot is updated with new data and its axes must follow. framewise
+# is a normalisation option of each element: set on an Overlay it is ignored (the axes of the
+# overlaid plots stayed at the first run's ranges), so every layer carries it.
+_FOLLOW_DATA = {"framewise": True}
+_LEGEND_OUTSIDE = {
+    "legend_position": "bottom",
+    "legend_cols": 3,
+}  # below the axes, never over the curves
 
 
 @dataclass(frozen=True)
@@ -89,27 +95,56 @@ def _time_curve(t_s, values, label, value_dim, scale):
     t, v = decimate_min_max(np.asarray(t_s), np.asarray(values) * scale)
     return hv.Curve(
         (t, v), kdims=[hv.Dimension("t", label="Time", unit="s")], vdims=[value_dim], label=label
-    )
+    ).opts(**_FOLLOW_DATA)
 
 
-def block_displacement_plot(results: Results) -> hv.Overlay:
+Runs = Results | Sequence[tuple[str, Results]]
+"""One run, or several labelled runs drawn on the same axes (e.g. what-if comparisons)."""
+
+
+def _labelled(runs: Runs) -> list[tuple[str | None, Results]]:
+    """``[(None, results)]`` for one run, else the (label, results) pairs."""
+    return [(None, runs)] if isinstance(runs, Results) else list(runs)
+
+
+def _combine(layers: list[hv.Element], **opts) -> hv.Element:
+    """One layer as it is, several as an overlay with the legend below the axes."""
+    if len(layers) == 1:
+        return layers[0].opts(**opts, **_COMMON)
+    return hv.Overlay(layers).opts(**opts, **_LEGEND_OUTSIDE, **_COMMON)
+
+
+def block_displacement_plot(runs: Runs) -> hv.Overlay:
     """Monitored block (sleeper) displacement against time, with the Winkler-beam curve."""
-    vt = results.vehicle_track
     disp = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
-    simulated = _time_curve(vt.t_s, vt.block_disp_m, "Vehicle–track model", disp, MM)
-    winkler = _time_curve(vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", disp, MM)
-    return (simulated.opts(line_width=1.5) * winkler.opts(line_dash="dashed", line_width=1.5)).opts(
-        title="Sleeper (block) displacement", legend_position="top_right", **_COMMON
-    )
+    layers = []
+    for label, results in _labelled(runs):
+        vt = results.vehicle_track
+        model = "Vehicle–track model" if label is None else label
+        winkler = "Winkler beam (BOEF)" if label is None else f"{label}: Winkler beam"
+        layers.append(_time_curve(vt.t_s, vt.block_disp_m, model, disp, MM).opts(line_width=1.5))
+        layers.append(
+            _time_curve(vt.t_s, vt.winkler_block_disp_m, winkler, disp, MM).opts(
+                line_dash="dashed", line_width=1.5
+            )
+        )
+    return _combine(layers, title="Sleeper (block) displacement")
 
 
-def invert_load_plot(results: Results) -> hv.Curve:
+def invert_load_plot(runs: Runs) -> hv.Element:
     """Force into the tunnel invert under the monitored block against time."""
     force = hv.Dimension("block_force", label="Force into the invert per block", unit="kN")
-    curve = _time_curve(
-        results.vehicle_track.t_s, results.vehicle_track.block_force_N, "Invert load", force, KN
-    )
-    return curve.opts(title="Invert load", **_COMMON)
+    layers = [
+        _time_curve(
+            results.vehicle_track.t_s,
+            results.vehicle_track.block_force_N,
+            "Invert load" if label is None else label,
+            force,
+            KN,
+        )
+        for label, results in _labelled(runs)
+    ]
+    return _combine(layers, title="Invert load")
 
 
 def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
@@ -122,25 +157,41 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
         kdims=[hv.Dimension("f", label="Frequency", unit="Hz")],
         vdims=[value_dim],
         label=label,
-    )
+    ).opts(**_FOLLOW_DATA)
 
 
-def load_psd_plot(results: Results) -> hv.Curve:
+def load_psd_plot(runs: Runs) -> hv.Element:
     """One-sided PSD of the line load on the tunnel section."""
     dim = hv.Dimension("load_psd", label="PSD", unit="(kN/m)²/Hz")
-    top = results.scenario.numerics.soil_max_frequency
-    curve = _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, "Line load", top)
-    return curve.opts(title="Invert line-load PSD", logy=True, **_COMMON)
+    layers = [
+        _psd_curve(
+            results.load.f_hz,
+            results.load.psd,
+            dim,
+            KN**2,
+            "Line load" if label is None else label,
+            results.scenario.numerics.soil_max_frequency,
+        )
+        for label, results in _labelled(runs)
+    ]
+    return _combine(layers, title="Invert line-load PSD", logy=True)
 
 
-def interface_psd_plot(results: Results) -> hv.Curve:
+def interface_psd_plot(runs: Runs) -> hv.Element:
     """One-sided PSD of the displacement at the ring–soil interface under the invert."""
     dim = hv.Dimension("interface_psd", label="PSD", unit="mm²/Hz")
-    top = results.scenario.numerics.soil_max_frequency
-    curve = _psd_curve(
-        results.soil.f_hz, results.soil.interface_psd, dim, MM**2, "Ring–soil interface", top
-    )
-    return curve.opts(title="Interface displacement PSD", logy=True, **_COMMON)
+    layers = [
+        _psd_curve(
+            results.soil.f_hz,
+            results.soil.interface_psd,
+            dim,
+            MM**2,
+            "Ring–soil interface" if label is None else label,
+            results.scenario.numerics.soil_max_frequency,
+        )
+        for label, results in _labelled(runs)
+    ]
+    return _combine(layers, title="Interface displacement PSD", logy=True)
 
 
 def paper_reference(path: Path = REFERENCE_FILE) -> list[dict]:
@@ -149,16 +200,19 @@ def paper_reference(path: Path = REFERENCE_FILE) -> list[dict]:
         return json.load(handle)["series"]
 
 
-def depth_profile_plot(results: Results, reference: list[dict] | None = None) -> hv.Overlay:
+def depth_profile_plot(runs: Runs, reference: list[dict] | None = None) -> hv.Overlay:
     """Peak dynamic displacement against depth below the invert, with the paper's points."""
     reference = paper_reference() if reference is None else reference
     depth = hv.Dimension("depth", label="Depth below the invert", unit="m")
     peak = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
-    soil = results.soil
     layers = [
         hv.Curve(
-            (soil.peak_disp_m * MM, soil.depth_m), kdims=[peak], vdims=[depth], label="This model"
-        ).opts(line_width=2)
+            (results.soil.peak_disp_m * MM, results.soil.depth_m),
+            kdims=[peak],
+            vdims=[depth],
+            label="This model" if label is None else label,
+        ).opts(line_width=2, **_FOLLOW_DATA)
+        for label, results in _labelled(runs)
     ]
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):
@@ -168,12 +222,12 @@ def depth_profile_plot(results: Results, reference: list[dict] | None = None) ->
             vdims=[depth],
             label=series["label"],
         )
-        layers.append(points.opts(marker=marker, size=10))
+        layers.append(points.opts(marker=marker, size=10, **_FOLLOW_DATA))
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        legend_position="bottom_right",
         padding=0.05,
+        **_LEGEND_OUTSIDE,
         **_COMMON,
     )
 

@@ -48,6 +48,8 @@ STAGE_OF_PLOT = {
 }
 SERVER_START_S = 90.0  # cold imports on a busy 2-core machine
 RUN_WAIT_MS = 120_000  # a page action that runs the pipeline
+# Two animation frames: the browser has painted what the last model change drew.
+PAINTED_JS = "() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))"
 
 pytestmark = [
     pytest.mark.browser,
@@ -84,6 +86,40 @@ FIGURES_JS = """() => {
 }"""
 
 
+# Per figure: its axis ranges and the extent of the data its renderers draw (finite values of
+# each glyph's x and y columns), to check that the axes cover the data.
+EXTENTS_JS = """() => {
+  const out = {};
+  for (const doc of (window.Bokeh ? window.Bokeh.documents : [])) {
+    for (const model of doc.all_models) {
+      if (model.type !== "Figure") continue;
+      const extent = {x: [Infinity, -Infinity], y: [Infinity, -Infinity]};
+      for (const renderer of model.renderers) {
+        const source = renderer.data_source, glyph = renderer.glyph;
+        if (!source || !glyph) continue;
+        for (const axis of ["x", "y"]) {
+          const spec = glyph[axis];
+          if (!spec || spec.field === undefined) continue;
+          const column = source.data instanceof Map ? source.data.get(spec.field)
+                                                    : source.data[spec.field];
+          for (const value of column ?? []) {
+            if (typeof value !== "number" || !isFinite(value)) continue;
+            extent[axis][0] = Math.min(extent[axis][0], value);
+            extent[axis][1] = Math.max(extent[axis][1], value);
+          }
+        }
+      }
+      out[model.title ? model.title.text : ""] = {
+        x_range: [model.x_range.start, model.x_range.end],
+        y_range: [model.y_range.start, model.y_range.end],
+        x_data: extent.x, y_data: extent.y,
+      };
+    }
+  }
+  return out;
+}"""
+
+
 def free_port() -> int:
     """A TCP port nobody listens on right now."""
     with socket.socket() as sock:
@@ -92,8 +128,11 @@ def free_port() -> int:
 
 
 @contextlib.contextmanager
-def serve_app(log_path: Path) -> Iterator[str]:
-    """Run ``panel serve dashboard/app.py`` on a free port; yield the app's URL."""
+def serve_app_process(
+    log_path: Path, extra_args: tuple[str, ...] = ()
+) -> Iterator[tuple[str, subprocess.Popen]]:
+    """Run ``panel serve dashboard/app.py --warm`` on a free port; yield the app's URL and the
+    server process."""
     port = free_port()
     command = [
         sys.executable,
@@ -101,12 +140,14 @@ def serve_app(log_path: Path) -> Iterator[str]:
         "panel",
         "serve",
         "dashboard/app.py",
+        "--warm",  # run the app once at start: the kernels compile before the first visitor
         "--port",
         str(port),
         "--address",
         "127.0.0.1",
         "--allow-websocket-origin",
         f"127.0.0.1:{port}",
+        *extra_args,
     ]
     with log_path.open("w") as log:
         process = subprocess.Popen(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
@@ -123,7 +164,7 @@ def serve_app(log_path: Path) -> Iterator[str]:
                 if time.monotonic() > deadline:
                     raise RuntimeError(f"panel serve did not answer: {log_path.read_text()}")
                 time.sleep(0.2)
-            yield f"http://127.0.0.1:{port}/app"
+            yield f"http://127.0.0.1:{port}/app", process
         finally:
             process.terminate()
             try:
@@ -131,6 +172,13 @@ def serve_app(log_path: Path) -> Iterator[str]:
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
+
+
+@contextlib.contextmanager
+def serve_app(log_path: Path) -> Iterator[str]:
+    """Run the dashboard server (:func:`serve_app_process`); yield the app's URL."""
+    with serve_app_process(log_path) as (url, _process):
+        yield url
 
 
 def launch_chromium(playwright):
@@ -332,3 +380,100 @@ def test_exported_report_opens_offline_with_every_plot(page, browser, tmp_path):
     assert '"youngs_modulus": 6000000.0' in viewer.locator("pre.scenario-json").inner_text()
     assert network == []  # nothing was requested from the network
     offline.close()
+
+
+def uncovered_data(page) -> dict[str, str]:
+    """Figures whose axis range leaves some of their data outside (empty when all is shown)."""
+    problems = {}
+    for title, fig in page.evaluate(EXTENTS_JS).items():
+        for axis in ("x", "y"):
+            low, high = sorted(fig[f"{axis}_range"])
+            data_low, data_high = fig[f"{axis}_data"]
+            # 1e-9 of the span: the axis may end exactly on the data (framewise, no padding)
+            slack = 1e-9 * (high - low)
+            if data_low < low - slack or data_high > high + slack:
+                problems[f"{title} {axis}"] = (
+                    f"axis {low:g}–{high:g}, data {data_low:g}–{data_high:g}"
+                )
+    return problems
+
+
+def test_axes_cover_the_data_after_a_speed_and_a_soil_change(page):
+    """The defect: after a slower train the sleeper plot's time axis kept the first run's end,
+    and after a softer soil the depth plot's displacement axis cut the curve off."""
+    assert uncovered_data(page) == {}
+    counts = render_counts(page)
+    before = signatures(page)
+    type_value(page, "train.speed_kmh", "45")  # a longer passage (0.81 s → 1.79 s)
+    wait_for_renders(page, "soil", counts["soil"] + 1)
+    wait_for_new_data(page, before, PLOT_TITLES)
+    page.evaluate(PAINTED_JS)
+    assert uncovered_data(page) == {}
+    before = signatures(page)
+    type_value(page, "soil.youngs_modulus", "3")  # MPa: about twice the displacement
+    wait_for_renders(page, "soil", counts["soil"] + 2)
+    wait_for_new_data(page, before, ["Peak dynamic displacement against depth"])
+    page.evaluate(PAINTED_JS)
+    assert uncovered_data(page) == {}
+
+
+def test_inputs_are_shown_in_engineering_units_with_tooltips(page):
+    soil = page.locator(".param-soil-youngs_modulus")
+    assert "Soil Young's modulus (MPa)" in soil.locator("label").first.inner_text()
+    assert soil.locator("input").first.input_value() == "6"
+    fastener = page.locator(".param-track-fastener_stiffness")
+    assert "(MN/m)" in fastener.locator("label").first.inner_text()
+    assert fastener.locator("input").first.input_value() == "80"
+    assert page.locator(".param-soil-youngs_modulus .bk-description").count() == 1  # tooltip
+
+
+def test_typed_text_that_is_not_a_number_gets_a_message(page):
+    type_value(page, "soil.youngs_modulus", "abc")
+    message = page.locator(".error-alert li")
+    message.wait_for(timeout=RUN_WAIT_MS)
+    assert "'abc' is not a number in MPa" in message.inner_text()
+    box = page.locator(".param-soil-youngs_modulus input").first
+    page.wait_for_function(
+        "box => box.value === '6'", arg=box.element_handle(), timeout=RUN_WAIT_MS
+    )  # the box shows the value still in force
+    assert render_counts(page) == {"vehicle_track": 1, "load": 1, "soil": 1}
+
+
+def slider_state(page, path: str) -> dict[str, str]:
+    """Range and position of a parameter's slider handle, from its ARIA attributes."""
+    handle = page.locator(f".param-{path.replace('.', '-')} .noUi-handle")
+    return {name: handle.get_attribute(name) for name in ("aria-valuemin", "aria-valuemax")}
+
+
+def test_rejected_values_leave_the_slider_range_alone(page):
+    before = slider_state(page, "train.speed_kmh")
+    for text in ("0", "500", "-1"):  # speed must lie in (0, 400] km/h
+        type_value(page, "train.speed_kmh", text)
+        page.locator(".error-alert li").wait_for(timeout=RUN_WAIT_MS)
+        assert "outside the allowed range" in page.locator(".error-alert li").inner_text()
+    page.wait_for_timeout(500)  # time for any (wrong) range update to arrive
+    assert slider_state(page, "train.speed_kmh") == before
+    assert render_counts(page) == {"vehicle_track": 1, "load": 1, "soil": 1}
+
+
+def test_two_sessions_computing_at_once_both_finish_with_their_own_numbers(browser, app_url):
+    """Two users change the speed at the same moment; each page ends with the numbers of its
+    own speed, equal to those of a page opened directly at that speed."""
+    pages = []
+    for _ in range(2):
+        context = browser.new_context(viewport={"width": 1280, "height": 720})
+        pages.append(context.new_page())
+        open_dashboard(pages[-1], app_url)
+    speeds = ("70", "90")
+    for page, speed in zip(pages, speeds, strict=True):
+        type_value(page, "train.speed_kmh", speed)
+    for page in pages:
+        wait_for_renders(page, "vehicle_track", 2)
+        wait_for_renders(page, "soil", 2)
+    shown = [summary_values(page) for page in pages]
+    assert shown[0]["peak_invert_force"] != shown[1]["peak_invert_force"]
+    for page, speed, values in zip(pages, speeds, shown, strict=True):
+        page.goto(f"{app_url}?{CHEAP_QUERY.replace('speed_kmh=100', f'speed_kmh={speed}')}")
+        wait_for_renders(page, "soil", 1)
+        assert summary_values(page) == values
+        page.context.close()

@@ -4,7 +4,7 @@ All runs use a cheap scenario (single bogie at 100 km/h, 11 output depths) and t
 pipeline; one stage cache per module keeps repeated stages out of the test time.
 """
 
-import asyncio
+import datetime
 import html
 import io
 import json
@@ -20,10 +20,11 @@ from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
-from dashboard.app import HIDDEN, PRIMARY, Dashboard
+from dashboard.app import HIDDEN, PRIMARY, SWITCHES, Dashboard
 from dashboard.export import main as export_main
-from dashboard.export import report_html
-from model.params import SECTIONS, Scenario
+from dashboard.export import package_version, report_html
+from model import scenarios
+from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.pipeline import STAGES, StageCache, run
 
 MM = 1e3
@@ -132,6 +133,28 @@ def test_depth_plot_overlays_both_paper_series_separately(results):
     np.testing.assert_allclose(conclusions.dimension_values(1), [0.0, 35.0])
 
 
+def test_plots_overlay_several_labelled_runs(results, cache, cheap_scenario):
+    """A list of (label, Results) draws one curve per run, each with its run's own numbers."""
+    slower = cheap_scenario()
+    slower.train.speed_kmh = 80.0
+    runs = [("100 km/h", results), ("80 km/h", run(slower, cache=cache))]
+    loads = _curves(plots.invert_load_plot(runs))
+    assert set(loads) == {"100 km/h", "80 km/h"}
+    for label, res in runs:
+        assert loads[label].dimension_values(1).max() == pytest.approx(
+            res.summary()["peak_invert_force_N"] / 1e3, rel=1e-12
+        )
+    assert set(_curves(plots.block_displacement_plot(runs))) == {
+        "100 km/h",
+        "100 km/h: Winkler beam",
+        "80 km/h",
+        "80 km/h: Winkler beam",
+    }
+    assert {"100 km/h", "80 km/h", "Paper Fig. 11"} <= set(_curves(plots.depth_profile_plot(runs)))
+    for draw in (plots.load_psd_plot, plots.interface_psd_plot):
+        assert set(_curves(draw(runs))) == {"100 km/h", "80 km/h"}
+
+
 def test_reference_data_is_found_from_any_working_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert [s["label"] for s in plots.paper_reference()] == ["Paper Fig. 11", "Paper conclusions"]
@@ -150,7 +173,7 @@ def test_summary_items_are_the_summary_in_display_units(results):
 
 
 # ---- app.py ---------------------------------------------------------------------------------
-def test_app_builds_with_a_widget_for_every_parameter(dashboard):
+def test_app_builds_with_a_control_for_every_parameter(dashboard):
     page = dashboard.template()
     assert isinstance(page, pn.template.BootstrapTemplate)
     expected = {
@@ -159,49 +182,52 @@ def test_app_builds_with_a_widget_for_every_parameter(dashboard):
         for name in getattr(dashboard.scenario, section).param
         if name != "name"
     }
-    assert set(dashboard.widgets) == expected - HIDDEN
-    assert set(PRIMARY) <= set(dashboard.widgets)
+    assert set(dashboard.controls) == expected - HIDDEN
+    assert set(PRIMARY) <= set(dashboard.controls)
     pn.Row(dashboard).get_root()  # the whole layout renders to Bokeh models
 
 
-def test_groups_hold_every_other_parameter_and_render_when_opened(dashboard):
+def test_sidebar_has_the_main_inputs_up_front_and_the_rest_in_groups(dashboard):
     """Groups start collapsed and empty (fast page load) and fill on first opening."""
-    cards = [item for item in dashboard.sidebar() if isinstance(item, pn.Card)]
+    sidebar = dashboard.sidebar()
+    up_front = [item for item in sidebar if item in dashboard.controls.values()]
+    assert up_front == [dashboard.controls[p] for p in (*SWITCHES, *PRIMARY)]
+    assert dashboard.preset_select in sidebar and dashboard.train_type in sidebar
+    cards = [item for item in sidebar if isinstance(item, pn.Card)]
     grouped = {}
     for card in cards[:-1]:  # the last card holds the scenario file controls
         assert card.collapsed and not card.objects
         card.collapsed = False
-        grouped[card.title] = [w for w in card.objects if w in dashboard.widgets.values()]
+        grouped[card.title] = list(card.objects)
     in_groups = {
         path
-        for path, w in dashboard.widgets.items()
-        if any(w in members for members in grouped.values())
+        for path, control in dashboard.controls.items()
+        if any(control.__panel__() in members for members in grouped.values())
     }
-    assert in_groups == set(dashboard.widgets) - set(PRIMARY)
-    assert dashboard.train_type in cards[0].objects
-    assert dashboard.widgets["soil.poisson_ratio"] in grouped["Soil"]
+    assert in_groups == set(dashboard.controls) - set(PRIMARY) - set(SWITCHES)
+    assert dashboard.controls["soil.poisson_ratio"].__panel__() in grouped["Soil"]
+    assert dashboard.controls["longterm.years"].__panel__() in grouped["Long-term settlement"]
 
 
-def test_widgets_take_label_range_and_value_from_the_params(dashboard):
-    """No default or range is repeated in the app: all come from model.params."""
-    for path, widget in dashboard.widgets.items():
-        section, _, name = path.partition(".")
-        obj = getattr(dashboard.scenario, section)
-        p = obj.param[name]
-        assert widget.label == p.label, path
-        if hasattr(widget, "start") and p.softbounds is not None:
-            value = getattr(obj, name)
-            assert (widget.start, widget.end) == (
-                min(p.softbounds[0], value),
-                max(p.softbounds[1], value),
-            ), path
-            assert widget.value == value, path
-
-
-def _release(widget, value):
-    """What the browser sends when a slider is released (or a value typed and entered)."""
-    with param.edit_constant(widget):
-        widget.param.update(value=value, value_throttled=value)
+def test_controls_take_unit_label_range_value_and_tooltip_from_the_params(dashboard):
+    """No default or range is repeated in the app: all come from model.params, scaled to the
+    display unit (exact up to the 12 significant digits the conversion keeps)."""
+    for path, control in dashboard.controls.items():
+        p = parameter_of(path)
+        unit, factor = display_unit(path)
+        assert control.label == display_label(path), path
+        assert p.doc in control.tooltip and control.label in control.tooltip, path
+        value = getattr(getattr(dashboard.scenario, path.split(".")[0]), path.split(".")[1])
+        if control.slider is not None:
+            low, high = p.softbounds
+            shown = value if isinstance(p, param.Integer) else value * factor
+            assert control.slider.start == pytest.approx(min(low * factor, shown), rel=1e-12)
+            assert control.slider.end == pytest.approx(max(high * factor, shown), rel=1e-12)
+            assert control.slider.value == pytest.approx(shown, rel=1e-12), path
+    soil = dashboard.controls["soil.youngs_modulus"]
+    assert soil.label == "Soil Young's modulus (MPa)" and soil.text.value == "6"
+    assert dashboard.controls["track.rail_E"].text.value == "205.9"  # GPa
+    assert dashboard.controls["track.fastener_stiffness"].text.value == "80"  # MN/m
 
 
 def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
@@ -216,7 +242,7 @@ def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
 
 def test_speed_change_updates_every_plot(dashboard):
     before = {key: np.concatenate(_pane_data(dashboard, key)) for key in dashboard.plot_panes}
-    _release(dashboard.widgets["train.speed_kmh"], 90.0)
+    dashboard.controls["train.speed_kmh"].slide(90.0)
     assert dashboard.scenario.train.speed_kmh == 90.0
     assert dashboard.results.scenario.train.speed_kmh == 90.0
     for key in dashboard.plot_panes:
@@ -225,12 +251,21 @@ def test_speed_change_updates_every_plot(dashboard):
     assert dashboard.render_counts == dict.fromkeys(STAGES, 2)
 
 
-def test_soil_change_redraws_only_the_soil_plots(dashboard):
+def test_slider_values_are_rounded_to_the_slider_step(dashboard):
+    """A dragged position with binary noise (55.99999999999999) is set and shown as 56."""
+    control = dashboard.controls["train.speed_kmh"]
+    control.slide(95.99999999999999)
+    assert dashboard.scenario.train.speed_kmh == 96.0
+    assert control.text.value == "96"
+
+
+def test_soil_change_in_display_units_redraws_only_the_soil_plots(dashboard):
     old = dashboard.results
     panes = {key: pane.object for key, pane in dashboard.plot_panes.items()}
     summary_before = dashboard.summary.object
     soil_before = dashboard.soil_summary.object
-    _release(dashboard.widgets["soil.youngs_modulus"], 12e6)
+    dashboard.controls["soil.youngs_modulus"].enter("12 MPa")
+    assert dashboard.scenario.soil.youngs_modulus == 12e6  # SI inside
     assert set(dashboard.results.cached_stages) == {"vehicle_track", "load"}
     for spec in plots.PLOTS:
         assert dashboard.plot_panes[spec.key].object is panes[spec.key]  # updated in place
@@ -247,6 +282,7 @@ def test_soil_change_redraws_only_the_soil_plots(dashboard):
     # doubling E at fixed ν doubles μ (2 × 2.3077 MPa from E = 6 MPa, ν = 0.3)
     assert "4.615 MPa" in dashboard.soil_summary.object
     assert 'data-renders="2"' in dashboard.status.object and "cached" in dashboard.status.object
+    assert json.loads(dashboard._scenario_file().getvalue())["soil"]["youngs_modulus"] == 12e6
 
 
 def test_a_run_marks_only_the_plots_it_will_change_as_loading(dashboard):
@@ -262,46 +298,54 @@ def test_a_run_marks_only_the_plots_it_will_change_as_loading(dashboard):
     assert "Computing soil… 50%" in dashboard.status.object
 
 
-def test_edits_during_a_run_are_coalesced_into_one_more_run(dashboard, monkeypatch):
+def test_edits_during_a_run_give_one_more_run_with_the_newest_value(dashboard, monkeypatch):
     """Three edits while a run computes give exactly one further run, with the last value."""
     speeds = []
-    compute = dashboard._compute
+    compute = dashboard.runs._compute
 
-    def slow_user_compute(scenario, progress):
+    def slow_user_compute(scenario):
         speeds.append(scenario.train.speed_kmh)
         if len(speeds) == 1:
             for speed in (91.0, 92.0, 93.0):
-                dashboard.scenario.train.speed_kmh = speed
-                dashboard.refresh()
-        return compute(scenario, progress)
+                dashboard.controls["train.speed_kmh"].enter(str(speed))
+        return compute(scenario)
 
-    monkeypatch.setattr(dashboard, "_compute", slow_user_compute)
-    dashboard.scenario.train.speed_kmh = 90.0
-    dashboard._running = True  # as refresh() does before scheduling the worker
-    asyncio.run(dashboard._run_in_worker())
+    monkeypatch.setattr(dashboard.runs, "_compute", slow_user_compute)
+    dashboard.controls["train.speed_kmh"].enter("90")
     assert speeds == [90.0, 93.0]
     assert dashboard.results.scenario.train.speed_kmh == 93.0
-    assert not dashboard._running and not dashboard.progress.visible
+    assert not dashboard.runs.busy and not dashboard.progress.visible
 
 
-def test_invalid_value_gives_a_clear_message_and_changes_nothing(dashboard):
-    widget = dashboard.widgets["soil.youngs_modulus"]
+@pytest.mark.parametrize("text", ["-5", "0", "abc", "6 kPa", ""])
+def test_refused_text_gives_a_message_and_changes_nothing(dashboard, text):
+    control = dashboard.controls["soil.youngs_modulus"]
     results_before = dashboard.results
-    _release(widget, -5.0)
+    slider_range = (control.slider.start, control.slider.end)
+    control.enter(text)
     alert = dashboard.error_alert
     assert alert.visible
-    text = alert.object.replace("\\", "")
-    assert "youngs_modulus" in text and "-5.0" in text and "outside the allowed range" in text
-    assert "Traceback" not in text
+    message = alert.object.replace("\\", "")
+    assert "soil.youngs_modulus" in message and "Traceback" not in message
+    expected = "outside the allowed range (0, inf) MPa" if text in ("-5", "0") else "not a number"
+    assert expected in message and repr(text) in message or f"= {text} MPa" in message
     assert dashboard.scenario.soil.youngs_modulus == 6e6
-    assert widget.value == 6e6  # the widget shows the value still in force
+    assert control.text.value == "6"  # the box shows the value still in force
+    assert (control.slider.start, control.slider.end) == slider_range
     assert dashboard.results is results_before
-    _release(widget, 8e6)  # a good value clears the message
+    control.enter("8")  # a good value clears the message
     assert not alert.visible
 
 
+def test_accepted_value_outside_the_soft_bounds_widens_the_slider(dashboard):
+    control = dashboard.controls["train.speed_kmh"]
+    control.enter("180")
+    assert dashboard.scenario.train.speed_kmh == 180.0
+    assert control.slider.end == 180.0 and control.slider.value == 180.0
+
+
 def test_inconsistent_inputs_are_reported_not_raised(dashboard):
-    _release(dashboard.widgets["irregularity.wavelength_min"], 60.0)
+    dashboard.controls["irregularity.wavelength_min"].enter("60")
     assert dashboard.error_alert.visible
     text = dashboard.error_alert.object.replace("\\", "")
     assert "Inconsistent inputs" in text and "wavelength_max" in text
@@ -309,14 +353,14 @@ def test_inconsistent_inputs_are_reported_not_raised(dashboard):
 
 
 def test_optional_parameter_text_box_accepts_automatic(dashboard):
-    widget = dashboard.widgets["numerics.n_rail_modes"]
-    assert isinstance(widget, pn.widgets.TextInput) and widget.value == ""
-    widget.value = "abc"
+    control = dashboard.controls["numerics.n_rail_modes"]
+    assert control.slider is None and control.text.value == ""
+    control.enter("abc")
     assert "not a whole number" in dashboard.error_alert.object
-    widget.value = str(dashboard.scenario.rail_modes)
+    control.enter(str(dashboard.scenario.rail_modes))
     assert dashboard.scenario.numerics.n_rail_modes == dashboard.scenario.rail_modes
     assert not dashboard.error_alert.visible
-    widget.value = ""
+    control.enter("")
     assert dashboard.scenario.numerics.n_rail_modes is None
 
 
@@ -324,30 +368,41 @@ def test_train_type_selector_applies_the_standard_geometry(dashboard):
     assert dashboard.train_type.value == "Type A"
     dashboard.train_type.value = "Type B"
     assert dashboard.scenario.train.car_length == 19.0  # Train.type_b, MODEL.md §1
-    assert dashboard.widgets["train.car_length"].value == 19.0
-    _release(dashboard.widgets["train.car_length"], 20.0)
-    assert dashboard.train_type.value == "Custom"
+    assert dashboard.controls["train.car_length"].text.value == "19"
+    dashboard.controls["train.car_length"].enter("20")
+    assert dashboard.train_type.value == scenarios.CUSTOM
 
 
-def test_preset_selector_replaces_the_scenario_and_the_widgets(cache, cheap_scenario):
+def test_preset_label_says_custom_once_an_input_is_edited(cache, cheap_scenario):
+    board = Dashboard(scenario=Scenario.preset("single_bogie"), preset="single_bogie", cache=cache)
+    board.refresh = lambda: None  # runs are not needed here
+    assert board.preset_select.value == "single_bogie"
+    board.controls["soil.density"].enter("1900")
+    assert board.preset_select.value == scenarios.CUSTOM
+    board.controls["soil.density"].enter("1800")  # back to the preset's inputs
+    assert board.preset_select.value == "single_bogie"
+
+
+def test_preset_selector_replaces_the_scenario_and_the_controls(cache, cheap_scenario):
     board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
     board.refresh = lambda: None  # the paper case is a full-train run; not needed here
     board.preset_select.value = "paper_soil_lame"
     assert board.scenario.soil.youngs_modulus == pytest.approx(550.07e6, rel=1e-4)
-    widget = board.widgets["soil.youngs_modulus"]
-    assert widget.value == board.scenario.soil.youngs_modulus
-    assert widget.end >= widget.value  # the slider widens to show an out-of-range preset value
-    assert board.widgets["train.single_bogie"].value is False
+    control = board.controls["soil.youngs_modulus"]
+    assert control.slider.value == pytest.approx(550.07, rel=1e-4)  # MPa
+    assert control.slider.end >= control.slider.value  # widened to an out-of-range preset value
+    assert board.controls["train.single_bogie"].widget.value is False
+    assert board.preset_select.value == "paper_soil_lame"
 
 
 def test_scenario_save_and_load_round_trip(dashboard):
-    _release(dashboard.widgets["train.speed_kmh"], 95.0)
+    dashboard.controls["train.speed_kmh"].enter("95")
     saved = dashboard._scenario_file().getvalue()
     assert Scenario.from_json(saved).train.speed_kmh == 95.0
-    _release(dashboard.widgets["train.speed_kmh"], 100.0)
+    dashboard.controls["train.speed_kmh"].enter("100")
     dashboard.load_input.param.update(filename="s.json", value=saved.encode())
     assert dashboard.scenario.train.speed_kmh == 95.0
-    assert dashboard.widgets["train.speed_kmh"].value == 95.0
+    assert dashboard.controls["train.speed_kmh"].text.value == "95"
     assert dashboard.results.scenario.train.speed_kmh == 95.0
 
 
@@ -373,14 +428,31 @@ def test_query_arguments_choose_preset_and_overrides(cache):
         {"preset": [b"single_bogie"], "train.speed_kmh": [b"70"], "numerics.n_depths": [b"11"]},
         cache=cache,
     )
-    assert board.preset_select.value == "single_bogie"
     assert board.scenario.train.single_bogie and board.scenario.train.speed_kmh == 70.0
-    assert board.widgets["train.speed_kmh"].value == 70.0
+    assert board.controls["train.speed_kmh"].text.value == "70"
+    assert board.preset_select.value == scenarios.CUSTOM  # the preset with edits
     assert not board.error_alert.visible
+    plain = Dashboard.from_query({"preset": [b"single_bogie"]}, cache=cache)
+    assert plain.preset_select.value == "single_bogie"
     bad = Dashboard.from_query({"preset": [b"nope"], "soil.youngs_modulus": [b"-3"]}, cache=cache)
     text = bad.error_alert.object.replace("\\", "")
     assert "unknown preset 'nope'" in text and "youngs_modulus" in text
     assert bad.preset_select.value == "paper"
+
+
+def test_added_view_becomes_a_tab(dashboard):
+    view = pn.pane.Markdown("long-term")
+    dashboard.add_view("Long-term settlement", view)
+    assert [title for title, _ in zip(dashboard.tabs._names, dashboard.tabs, strict=True)] == [
+        "Passage",
+        "Long-term settlement",
+    ]
+
+
+def test_closing_a_session_drops_its_results(dashboard):
+    dashboard.close()
+    assert dashboard.results is None and not dashboard.plot_streams
+    assert all(pane.object is None for pane in dashboard.plot_panes.values())
 
 
 # ---- export.py ------------------------------------------------------------------------------
@@ -429,6 +501,13 @@ def test_report_is_self_contained_and_complete(results):
     for item in plots.summary_items(results):
         assert f'data-key="{item.key}">{item.text}<' in shown
     assert html.escape(results.scenario_json) in shown  # the full scenario, as <pre> text
+
+
+def test_report_header_names_the_scenario_date_and_version(results):
+    shown = "".join(_markup_texts(report_html(results, scenario_name="single_bogie")))
+    today = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d")
+    assert "Scenario: <b>single_bogie</b>" in shown
+    assert today in shown and f"tunnelsettle {package_version()}" in shown
 
 
 def test_report_download_button_serves_the_report(dashboard):

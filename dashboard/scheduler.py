@@ -1,0 +1,120 @@
+"""Run scheduling for the served dashboard, free of Panel so that it can be tested on its own.
+
+* One process-wide thread pool (:data:`EXECUTOR`) with as many workers as cores: runs from
+  different sessions compute in parallel (the Numba kernels release the GIL).
+* One :class:`LatestRun` per session: at most one run of the session computes at a time and
+  at most one waits; a newer request replaces the waiting one, so dragging a slider or pressing
+  an arrow key repeatedly never queues stale runs.
+* :func:`warm_up`: one cheap run when the server starts, so the kernels are compiled (or loaded
+  from Numba's cache) before the first visitor asks for a result.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import threading
+from collections.abc import Callable
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
+from typing import Generic, TypeVar
+
+Job = TypeVar("Job")
+Outcome = TypeVar("Outcome")
+
+EXECUTOR = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="pipeline")
+"""Worker threads shared by every session of the server process."""
+
+_warm_up_lock = threading.Lock()
+_warm_up_future: Future | None = None
+
+
+def warm_up(task: Callable[[], object], executor: Executor = EXECUTOR) -> Future:
+    """Start ``task`` once per process in ``executor``; every call returns the same future."""
+    global _warm_up_future
+    with _warm_up_lock:
+        if _warm_up_future is None:
+            _warm_up_future = executor.submit(task)
+        return _warm_up_future
+
+
+class LatestRun(Generic[Job, Outcome]):
+    """One session's runs: one computing at a time, and only the newest request waiting.
+
+    Parameters
+    ----------
+    compute : callable
+        ``compute(job) -> outcome``, called in ``executor``; an exception it raises is passed
+        on as the outcome (to be shown, not raised).
+    executor : Executor
+        Where runs compute (default: the shared :data:`EXECUTOR`).
+    """
+
+    def __init__(self, compute: Callable[[Job], Outcome], executor: Executor = EXECUTOR) -> None:
+        self._compute = compute
+        self._executor = executor
+        self._lock = threading.Lock()
+        self._waiting: Job | None = None
+        self._has_waiting = False
+        self._busy = False
+
+    @property
+    def busy(self) -> bool:
+        """True while a run computes or waits."""
+        return self._busy
+
+    def request(self, job: Job) -> bool:
+        """Ask for ``job`` to run, replacing any job still waiting.
+
+        Returns True when nothing was running: the caller must then await :meth:`drain`.
+        """
+        with self._lock:
+            self._waiting, self._has_waiting = job, True
+            if self._busy:
+                return False
+            self._busy = True
+            return True
+
+    def _next(self) -> tuple[bool, Job | None]:
+        """Take the waiting job, or mark the queue idle when there is none."""
+        with self._lock:
+            if not self._has_waiting:
+                self._busy = False
+                return False, None
+            job, self._waiting, self._has_waiting = self._waiting, None, False
+            return True, job
+
+    def _guarded(self, job: Job) -> Outcome | BaseException:
+        """``compute(job)``, with an exception returned instead of raised."""
+        try:
+            return self._compute(job)
+        except Exception as error:  # noqa: BLE001 (shown to the user by the caller)
+            return error
+
+    async def drain(
+        self,
+        started: Callable[[Job], None],
+        finished: Callable[[Job, Outcome | BaseException], None],
+        tick: Callable[[], None] | None = None,
+        poll_s: float = 0.1,
+    ) -> None:
+        """Compute jobs until none waits: ``started(job)``, then ``finished(job, outcome)``.
+
+        ``tick()`` is called every ``poll_s`` seconds while a job computes (progress display).
+        The callbacks run in the awaiting event loop, never in a worker thread.
+        """
+        try:
+            while True:
+                has_job, job = self._next()
+                if not has_job:
+                    return
+                started(job)
+                future = asyncio.wrap_future(self._executor.submit(self._guarded, job))
+                while not future.done():
+                    await asyncio.wait([future], timeout=poll_s)
+                    if tick is not None:
+                        tick()
+                finished(job, future.result())
+        except BaseException:
+            with self._lock:
+                self._busy, self._waiting, self._has_waiting = False, None, False
+            raise

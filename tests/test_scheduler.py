@@ -1,0 +1,108 @@
+"""Run scheduling of the served dashboard (dashboard/scheduler.py), without Panel or a browser.
+
+Jobs are plain values and ``compute`` functions are controlled with threading events, so every
+test is deterministic: nothing depends on how long a computation takes.
+"""
+
+import asyncio
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+
+from dashboard import scheduler
+from dashboard.scheduler import LatestRun
+
+
+@pytest.fixture
+def pool():
+    with ThreadPoolExecutor(max_workers=2) as executor:
+        yield executor
+
+
+def _record(started, finished):
+    return (lambda job: started.append(job)), (lambda job, out: finished.append((job, out)))
+
+
+def test_a_request_while_idle_runs_at_once(pool):
+    runs = LatestRun(lambda job: job * 10, pool)
+    started, finished = [], []
+    assert runs.request(1) is True
+    asyncio.run(runs.drain(*_record(started, finished)))
+    assert started == [1] and finished == [(1, 10)] and not runs.busy
+
+
+def test_newest_request_supersedes_a_waiting_one(pool):
+    """While job 1 computes, jobs 2, 3, 4 are requested: only 4 runs after 1."""
+    release = threading.Event()
+    computed = []
+
+    def compute(job):
+        computed.append(job)
+        if job == 1:
+            assert release.wait(timeout=60)
+        return job
+
+    runs = LatestRun(compute, pool)
+    started, finished = [], []
+
+    async def scenario():
+        assert runs.request(1)
+        draining = asyncio.create_task(runs.drain(*_record(started, finished), poll_s=0.01))
+        while not computed:
+            await asyncio.sleep(0.01)
+        assert [runs.request(job) for job in (2, 3, 4)] == [False, False, False]
+        release.set()
+        await draining
+
+    asyncio.run(scenario())
+    assert computed == [1, 4] and [job for job, _ in finished] == [1, 4]
+    assert not runs.busy
+
+
+def test_an_exception_is_delivered_as_the_outcome(pool):
+    def compute(job):
+        raise ValueError(f"bad job {job}")
+
+    runs = LatestRun(compute, pool)
+    finished = []
+    runs.request(7)
+    asyncio.run(runs.drain(lambda job: None, lambda job, out: finished.append(out)))
+    assert isinstance(finished[0], ValueError) and str(finished[0]) == "bad job 7"
+    assert runs.request(8) is True  # the queue is usable again
+
+
+def test_sessions_compute_in_parallel(pool):
+    """Two sessions' runs overlap in time: each waits until the other has started (a barrier
+    that a one-worker pool could never pass)."""
+    barrier = threading.Barrier(2, timeout=60)
+
+    def compute(job):
+        barrier.wait()
+        return job
+
+    first, second = LatestRun(compute, pool), LatestRun(compute, pool)
+    results = []
+
+    async def both():
+        first.request("a")
+        second.request("b")
+        record = lambda job, out: results.append(out)  # noqa: E731
+        ignore = lambda job: None  # noqa: E731
+        await asyncio.gather(first.drain(ignore, record), second.drain(ignore, record))
+
+    asyncio.run(both())
+    assert sorted(results) == ["a", "b"]
+
+
+def test_the_shared_pool_has_a_worker_per_core():
+    assert scheduler.EXECUTOR._max_workers == (scheduler.os.cpu_count() or 1)
+
+
+def test_warm_up_runs_once_per_process(monkeypatch, pool):
+    monkeypatch.setattr(scheduler, "_warm_up_future", None)
+    calls = []
+    first = scheduler.warm_up(lambda: calls.append(1), pool)
+    second = scheduler.warm_up(lambda: calls.append(2), pool)
+    first.result(timeout=60)
+    assert first is second and calls == [1]
