@@ -8,7 +8,7 @@ reader expects (mm, kN, kN/m) and every axis label states its unit.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +16,7 @@ import holoviews as hv
 import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used below)
 import numpy as np
 
+from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.params import DATA_DIR, Soil
 from model.pipeline import Results
 
@@ -41,13 +42,21 @@ _COMMON = {
 }
 
 
+Overlays = Sequence[tuple[str, Results, str]]
+"""Pinned runs drawn under the current one: ``(label, results, colour)`` each, bottom first."""
+
+CURRENT_LINE_WIDTH = 2.5  # thicker than the pinned runs', so the current run stands out on top
+PINNED_LINE_WIDTH = 1.5
+
+
 @dataclass(frozen=True)
 class PlotSpec:
     """One plot: the pipeline stage its data comes from and the function that draws it."""
 
     key: str
     stage: str
-    draw: Callable[[Results], hv.Element]
+    draw: Callable[..., hv.Element]
+    """``draw(results, overlays=())``: the plot of one run, with pinned runs overlaid."""
 
 
 def decimate_min_max(
@@ -91,24 +100,84 @@ def _time_curve(t_s, values, label, value_dim, scale):
     )
 
 
-def block_displacement_plot(results: Results) -> hv.Overlay:
-    """Monitored block (sleeper) displacement against time, with the Winkler-beam curve."""
+def run_layers(
+    layer: Callable[[Results, str], hv.Element],
+    results: Results | None,
+    label: str,
+    overlays: Overlays = (),
+) -> list[hv.Element]:
+    """One run's layer, or with pinned runs: theirs in their colours, the current one on top.
+
+    Parameters
+    ----------
+    layer : callable(results, label) -> Element
+        Draws one run's curve.
+    results : Results or None
+        The current run (None: only the pinned runs, e.g. a report of a saved session).
+    label : str
+        Legend name of the current run when nothing is overlaid.
+    overlays : sequence of (label, Results, colour)
+        Pinned runs, drawn in this order under the current run.
+    """
+    if not overlays:
+        return [] if results is None else [layer(results, label)]
+    pinned = [
+        layer(run, name).opts(color=colour, line_width=PINNED_LINE_WIDTH)
+        for name, run, colour in overlays
+    ]
+    if results is None:
+        return pinned
+    current = layer(results, CURRENT_LABEL).opts(
+        color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
+    )
+    return [*pinned, current]
+
+
+def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Element:
+    """The current run's layer alone, or with pinned runs an Overlay with its legend outside."""
+    if not overlays:
+        return layers[0].opts(**opts, **_COMMON)
+    return hv.Overlay(layers).opts(**opts, legend_position="right", **_COMMON)
+
+
+BLOCK_DISP = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
+
+
+def _block_disp_curve(results: Results, label: str) -> hv.Curve:
+    """Simulated block displacement of one run."""
     vt = results.vehicle_track
-    disp = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
-    simulated = _time_curve(vt.t_s, vt.block_disp_m, "Vehicle–track model", disp, MM)
-    winkler = _time_curve(vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", disp, MM)
-    return (simulated.opts(line_width=1.5) * winkler.opts(line_dash="dashed", line_width=1.5)).opts(
-        title="Sleeper (block) displacement", legend_position="top_right", **_COMMON
+    return _time_curve(vt.t_s, vt.block_disp_m, label, BLOCK_DISP, MM).opts(line_width=1.5)
+
+
+def block_displacement_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Overlay:
+    """Monitored block (sleeper) displacement against time, with the Winkler-beam curve of the
+    current run; pinned runs (``overlays``) are drawn under it."""
+    layers = run_layers(_block_disp_curve, results, "Vehicle–track model", overlays)
+    if results is not None:
+        vt = results.vehicle_track
+        winkler = _time_curve(
+            vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", BLOCK_DISP, MM
+        )
+        layers.append(winkler.opts(line_dash="dashed", line_width=1.5))
+    return hv.Overlay(layers).opts(
+        title="Sleeper (block) displacement",
+        legend_position="right" if overlays else "top_right",
+        **_COMMON,
     )
 
 
-def invert_load_plot(results: Results) -> hv.Curve:
-    """Force into the tunnel invert under the monitored block against time."""
+def _invert_load_curve(results: Results, label: str) -> hv.Curve:
+    """Force into the invert under the monitored block of one run."""
     force = hv.Dimension("block_force", label="Force into the invert per block", unit="kN")
-    curve = _time_curve(
-        results.vehicle_track.t_s, results.vehicle_track.block_force_N, "Invert load", force, KN
-    )
-    return curve.opts(title="Invert load", **_COMMON)
+    vt = results.vehicle_track
+    return _time_curve(vt.t_s, vt.block_force_N, label, force, KN)
+
+
+def invert_load_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Curve | hv.Overlay:
+    """Force into the tunnel invert under the monitored block against time (a Curve; an
+    Overlay with pinned runs)."""
+    layers = run_layers(_invert_load_curve, results, "Invert load", overlays)
+    return _overlaid(layers, overlays, title="Invert load")
 
 
 def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
@@ -124,22 +193,33 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
     )
 
 
-def load_psd_plot(results: Results) -> hv.Curve:
-    """One-sided PSD of the line load on the tunnel section."""
+def _load_psd_curve(results: Results, label: str) -> hv.Curve:
+    """Line-load PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("load_psd", label="PSD", unit="(kN/m)²/Hz")
     top = results.scenario.numerics.soil_max_frequency
-    curve = _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, "Line load", top)
-    return curve.opts(title="Invert line-load PSD", logy=True, **_COMMON)
+    return _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, label, top)
 
 
-def interface_psd_plot(results: Results) -> hv.Curve:
-    """One-sided PSD of the displacement at the ring–soil interface under the invert."""
+def load_psd_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Curve | hv.Overlay:
+    """One-sided PSD of the line load on the tunnel section (an Overlay with pinned runs)."""
+    layers = run_layers(_load_psd_curve, results, "Line load", overlays)
+    return _overlaid(layers, overlays, title="Invert line-load PSD", logy=True)
+
+
+def _interface_psd_curve(results: Results, label: str) -> hv.Curve:
+    """Interface displacement PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("interface_psd", label="PSD", unit="mm²/Hz")
     top = results.scenario.numerics.soil_max_frequency
-    curve = _psd_curve(
-        results.soil.f_hz, results.soil.interface_psd, dim, MM**2, "Ring–soil interface", top
-    )
-    return curve.opts(title="Interface displacement PSD", logy=True, **_COMMON)
+    return _psd_curve(results.soil.f_hz, results.soil.interface_psd, dim, MM**2, label, top)
+
+
+def interface_psd_plot(
+    results: Results | None, *, overlays: Overlays = ()
+) -> hv.Curve | hv.Overlay:
+    """One-sided PSD of the displacement at the ring–soil interface under the invert (an
+    Overlay with pinned runs)."""
+    layers = run_layers(_interface_psd_curve, results, "Ring–soil interface", overlays)
+    return _overlaid(layers, overlays, title="Interface displacement PSD", logy=True)
 
 
 def paper_reference(path: Path = REFERENCE_FILE) -> list[dict]:
@@ -148,30 +228,38 @@ def paper_reference(path: Path = REFERENCE_FILE) -> list[dict]:
         return json.load(handle)["series"]
 
 
-def depth_profile_plot(results: Results, reference: list[dict] | None = None) -> hv.Overlay:
-    """Peak dynamic displacement against depth below the invert, with the paper's points."""
-    reference = paper_reference() if reference is None else reference
-    depth = hv.Dimension("depth", label="Depth below the invert", unit="m")
-    peak = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
+DEPTH = hv.Dimension("depth", label="Depth below the invert", unit="m")
+PEAK_DISP = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
+
+
+def _depth_curve(results: Results, label: str) -> hv.Curve:
+    """Peak displacement against depth of one run."""
     soil = results.soil
-    layers = [
-        hv.Curve(
-            (soil.peak_disp_m * MM, soil.depth_m), kdims=[peak], vdims=[depth], label="This model"
-        ).opts(line_width=2)
-    ]
+    return hv.Curve(
+        (soil.peak_disp_m * MM, soil.depth_m), kdims=[PEAK_DISP], vdims=[DEPTH], label=label
+    ).opts(line_width=2)
+
+
+def depth_profile_plot(
+    results: Results | None, reference: list[dict] | None = None, *, overlays: Overlays = ()
+) -> hv.Overlay:
+    """Peak dynamic displacement against depth below the invert, with the paper's points;
+    pinned runs (``overlays``) are drawn under the current run."""
+    reference = paper_reference() if reference is None else reference
+    layers = run_layers(_depth_curve, results, "This model", overlays)
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):
         points = hv.Scatter(
             (np.asarray(series["peak_disp_m"]) * MM, series["depth_m"]),
-            kdims=[peak],
-            vdims=[depth],
+            kdims=[PEAK_DISP],
+            vdims=[DEPTH],
             label=series["label"],
         )
         layers.append(points.opts(marker=marker, size=10))
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        legend_position="bottom_right",
+        legend_position="right" if overlays else "bottom_right",
         padding=0.05,
         **_COMMON,
     )
