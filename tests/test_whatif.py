@@ -227,12 +227,11 @@ def test_session_comparison_has_every_pinned_run_and_the_current_one(base_result
 # ---- pinning --------------------------------------------------------------------------------
 def test_pinning_keeps_the_results_and_never_recomputes(base_results, monkeypatch):
     """Pinning stores the very Results object given: no pipeline call at all."""
-    import model.pipeline
 
     def no_run(*args, **kwargs):
         raise AssertionError("pinning must not run the pipeline")
 
-    monkeypatch.setattr(model.pipeline, "run", no_run)
+    monkeypatch.setattr("dashboard.whatif.run", no_run)
     session = WhatIfSession()
     pinned = session.pin(base_results, "today")
     assert pinned.results is base_results
