@@ -141,7 +141,8 @@ COMPARISON_CSS = """
 table.comparison { border-collapse: collapse; font-size: 13px; }
 table.comparison th, table.comparison td { border: 1px solid #d0d7de; padding: 3px 6px; }
 table.comparison td { text-align: right; }
-table.comparison td:last-child { text-align: left; }
+table.comparison tbody th { text-align: left; min-width: 10em; }
+table.comparison td:last-child { text-align: left; min-width: 16em; }
 """
 """Style of :func:`comparison_html` tables, shared by the dashboard and the session report."""
 
@@ -149,7 +150,11 @@ table.comparison td:last-child { text-align: left; }
 def comparison_html(table: pd.DataFrame) -> str:
     """HTML of a what-if comparison table (numbers to four significant digits, "–" if absent)."""
     return table.to_html(
-        float_format=lambda value: f"{value:.4g}", na_rep="–", classes="comparison", border=0
+        float_format=lambda value: f"{value:.4g}",
+        na_rep="–",
+        classes="comparison",
+        border=0,
+        index_names=False,
     )
 
 

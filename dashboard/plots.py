@@ -47,6 +47,9 @@ Overlays = Sequence[tuple[str, Results, str]]
 
 CURRENT_LINE_WIDTH = 2.5  # thicker than the pinned runs', so the current run stands out on top
 PINNED_LINE_WIDTH = 1.5
+# With pinned runs, reference lines and points (Winkler beam, the paper's values) are drawn in
+# dark grey so that every colour of the legend names a run.
+REFERENCE_COLOUR = "#555555"
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,8 @@ def block_displacement_plot(results: Results | None, *, overlays: Overlays = ())
         winkler = _time_curve(
             vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", BLOCK_DISP, MM
         )
+        if overlays:
+            winkler = winkler.opts(color=REFERENCE_COLOUR)
         layers.append(winkler.opts(line_dash="dashed", line_width=1.5))
     return hv.Overlay(layers).opts(
         title="Sleeper (block) displacement",
@@ -255,6 +260,8 @@ def depth_profile_plot(
             vdims=[DEPTH],
             label=series["label"],
         )
+        if overlays:
+            points = points.opts(color=REFERENCE_COLOUR)
         layers.append(points.opts(marker=marker, size=10))
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",

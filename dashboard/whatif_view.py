@@ -130,6 +130,7 @@ class WhatIfPanel(pn.viewable.Viewer):
         self.table = pn.pane.HTML(
             "",
             stylesheets=[COMPARISON_CSS],
+            styles={"overflow-x": "auto"},  # a wide table scrolls instead of overflowing
             sizing_mode="stretch_width",
             css_classes=["whatif-table"],
         )
@@ -141,7 +142,7 @@ class WhatIfPanel(pn.viewable.Viewer):
             css_classes=["whatif-save"],
         )
         self.load_input = pn.widgets.FileInput(
-            accept=".json", multiple=False, sizing_mode="stretch_width"
+            accept=".json", multiple=False, sizing_mode="stretch_width", css_classes=["whatif-load"]
         )
         self.load_input.param.watch(self._on_load, "value")
         self.report_button = pn.widgets.FileDownload(
@@ -162,10 +163,12 @@ class WhatIfPanel(pn.viewable.Viewer):
             pn.Row(self.name_input, self.pin_button, sizing_mode="stretch_width"),
             self.message,
             self.runs_column,
-            self.save_button,
-            pn.pane.Markdown("Load a session file:", margin=(0, 5)),
-            self.load_input,
-            self.report_button,
+            pn.Row(self.save_button, self.report_button, sizing_mode="stretch_width"),
+            pn.Row(
+                pn.pane.Markdown("Load a session file:", width=150),
+                self.load_input,
+                sizing_mode="stretch_width",
+            ),
             sizing_mode="stretch_width",
         )
 
@@ -259,7 +262,7 @@ class WhatIfPanel(pn.viewable.Viewer):
             self._restore(current)
         self._changed()
 
-    def _release(self, _session_context=None) -> None:
+    def _release(self, session_context) -> None:
         """The browser session closed: let go of every pinned result."""
         self.session.clear()
         self.rows = []

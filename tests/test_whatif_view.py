@@ -218,5 +218,5 @@ def test_two_panels_share_nothing_and_closing_releases_the_runs(board, base_resu
     _pin(first, "mine")
     assert second.session.runs == [] and second.overlays() == []
     assert first.session is not second.session
-    first._release()  # what the server calls when the browser session closes
+    first._release(None)  # what the server calls when the browser session closes
     assert first.session.runs == [] and first.rows == []
