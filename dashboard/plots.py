@@ -8,6 +8,7 @@ reader expects (mm, kN, kN/m) and every axis label states its unit.
 from __future__ import annotations
 
 import json
+import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -124,16 +125,30 @@ def run_layers(
     """
     if not overlays:
         return [] if results is None else [layer(results, label)]
-    pinned = [
-        layer(run, name).opts(color=colour, line_width=PINNED_LINE_WIDTH)
-        for name, run, colour in overlays
-    ]
+    pinned = [_pinned_layer(layer, run, name, colour) for name, run, colour in overlays]
     if results is None:
         return pinned
     current = layer(results, CURRENT_LABEL).opts(
         color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
     )
     return [*pinned, current]
+
+
+_PINNED_LAYERS: dict[tuple, tuple[weakref.ref, hv.Element]] = {}
+"""Layers of pinned runs by (id(results), layer, name, colour), each dropped with its Results."""
+
+
+def _pinned_layer(layer, results: Results, name: str, colour: str) -> hv.Element:
+    """A pinned run's layer, built once: a pinned run never changes, and the very same element
+    lets a plot updated in place skip re-sending its data to the browser."""
+    key = (id(results), layer.__qualname__, name, colour)
+    cached = _PINNED_LAYERS.get(key)
+    if cached is not None and cached[0]() is results:
+        return cached[1]
+    element = layer(results, name).opts(color=colour, line_width=PINNED_LINE_WIDTH)
+    _PINNED_LAYERS[key] = (weakref.ref(results), element)
+    weakref.finalize(results, _PINNED_LAYERS.pop, key, None)
+    return element
 
 
 def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Element:

@@ -5,6 +5,8 @@ that needs real results uses two cheap pipeline runs that differ only in the soi
 reuses the first's vehicle–track and load stages from a module cache).
 """
 
+import dataclasses
+import gc
 import json
 import math
 
@@ -432,3 +434,18 @@ def test_plots_without_a_current_run_show_only_the_pinned_ones(base_results, sti
     overlays = [("a", base_results, PINNED_COLOURS[0]), ("b", stiff_results, PINNED_COLOURS[1])]
     for spec in plots.PLOTS:
         assert [c.label for c in _layers(spec.draw(None, overlays=overlays))] == ["a", "b"]
+
+
+def test_pinned_layers_are_built_once_and_released_with_their_run(base_results):
+    """Redrawing with the same pinned run reuses its very layer (so a plot updated in place
+    re-sends no data for it); the layer is forgotten once the run is released."""
+    pinned_run = dataclasses.replace(base_results)  # a Results object of its own
+    overlays = [("pinned", pinned_run, PINNED_COLOURS[0])]
+    first = _layers(plots.invert_load_plot(base_results, overlays=overlays))[0]
+    again = _layers(plots.invert_load_plot(base_results, overlays=overlays))[0]
+    assert again is first
+    held = [key for key in plots._PINNED_LAYERS if key[0] == id(pinned_run)]
+    assert len(held) == 1
+    del overlays, pinned_run, first, again
+    gc.collect()
+    assert not any(key in plots._PINNED_LAYERS for key in held)
