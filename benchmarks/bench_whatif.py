@@ -7,7 +7,10 @@ samples per history):
   and takes their summary once);
 * plot building: every function of ``dashboard.plots.PLOTS`` drawing the current run alone and
   with 8 pinned runs overlaid, as HoloViews elements, and rendered to Bokeh models (what the
-  server builds and sends when a plot is replaced); best of ``--repeat``.
+  server builds when a plot is replaced, e.g. after pinning); best of ``--repeat``;
+* in-place update: what the served dashboard does on a slider change, every plot's
+  DynamicMap sent new Results through its Pipe stream (the current run alternates between two
+  runs that differ in the soil), HoloViews updating the Bokeh models; best of ``--repeat``.
 
 The 8 pinned runs are the same Results object pinned under 8 names: drawing cost depends on
 the array sizes, not the values. A pinned run's layers are built once and reused (see
@@ -25,6 +28,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import itertools
 import statistics
 import sys
 import tempfile
@@ -35,6 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 import holoviews as hv  # noqa: E402
+from holoviews.streams import Pipe  # noqa: E402
 
 from dashboard import plots  # noqa: E402
 from dashboard.whatif import MAX_PINNED, WhatIfSession  # noqa: E402
@@ -75,8 +80,36 @@ def panel_free(repeat: int) -> None:
     def render(pinned):
         return lambda: [hv.render(element) for element in draw(pinned)()]
 
+    softer = Scenario.paper()
+    softer.soil.youngs_modulus = 5e6
+    other = run(softer, cache=None)
+
+    def update(pinned):
+        """A callable that sends the next current run to every plot, as a slider change does."""
+        streams, figures = [], []  # the plots are kept alive: they subscribe to the streams
+        for spec in plots.PLOTS:
+            stream = Pipe(data=results)
+            dmap = hv.DynamicMap(
+                lambda data, draw=spec.draw: draw(data, overlays=pinned), streams=[stream]
+            )
+            figures.append(hv.renderer("bokeh").get_plot(dmap))
+            streams.append(stream)
+        currents = itertools.cycle((other, results))
+
+        def send():
+            data = next(currents)
+            for stream in streams:
+                stream.send(data)
+
+        send.figures = figures
+        return send
+
     print(f"{'every plot (5), best of ' + str(repeat):<58} {'0 pinned':>11} {'8 pinned':>11} ratio")
-    for name, build in (("HoloViews elements", draw), ("elements rendered to Bokeh", render)):
+    for name, build in (
+        ("HoloViews elements", draw),
+        ("elements rendered to Bokeh", render),
+        ("in-place update through the streams (slider change)", update),
+    ):
         alone, pinned = best_of(repeat, build(())), best_of(repeat, build(overlays))
         print(f"{name:<58} {alone * 1e3:8.1f} ms {pinned * 1e3:8.1f} ms {pinned / alone:5.2f}")
 

@@ -400,14 +400,14 @@ class WhatIfSession:
 
         Without a current run, a current-run reference falls back to the first pinned run.
         """
+        # inputs straight from the JSON: no Scenario objects on every refresh of the table
         rows = [
-            ComparedRun(r.name, r.summary, flat_inputs(Scenario.from_json(r.scenario_json)))
+            ComparedRun(r.name, r.summary, flat_inputs(json.loads(r.scenario_json)))
             for r in self.runs
         ]
         if current is not None:
-            rows.append(
-                ComparedRun(CURRENT_LABEL, current.summary(), flat_inputs(current.scenario))
-            )
+            inputs = flat_inputs(json.loads(current.scenario_json))
+            rows.append(ComparedRun(CURRENT_LABEL, current.summary(), inputs))
         if not rows:
             raise ValueError("nothing to compare: no pinned run and no current run")
         names = [r.name for r in rows]
