@@ -1,9 +1,11 @@
-"""Static, self-contained HTML report of one run: the dashboard's plots, summary and scenario.
+"""Static, self-contained HTML report of one run: the dashboard's plots, summary and scenario;
+or of a what-if session: the plots with the pinned runs overlaid and the comparison table.
 
 All JavaScript and CSS are inlined, so the file opens offline. Command line::
 
     python -m dashboard.export --preset paper --out report.html
     python -m dashboard.export --scenario scenario.json --set train.speed_kmh=60 --out report.html
+    python -m dashboard.export --session whatif_session.json --out report.html
 """
 
 from __future__ import annotations
@@ -14,8 +16,10 @@ import html
 import importlib.metadata
 import io
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
+import pandas as pd
 import panel as pn
 from bokeh.document import Document
 from bokeh.models import ImportedStyleSheet, InlineStyleSheet
@@ -24,8 +28,9 @@ from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
+from dashboard.whatif import CURRENT_LABEL, WhatIfSession, load_session
 from model.__main__ import add_scenario_arguments, load_scenario
-from model.pipeline import Results, SimulationError, run
+from model.pipeline import Results, SimulationError, StageCache, run
 from model.scenarios import CUSTOM, matching_preset
 
 REPORT_TITLE = "tunnelsettle report"
@@ -119,11 +124,16 @@ def _packaged_stylesheet(sheet):
 
 def report_html(results: Results, scenario_name: str = "custom") -> str:
     """The report as one self-contained HTML document (inline JS and CSS)."""
+    return standalone_html(lambda: build_report(results, scenario_name))
+
+
+def standalone_html(build: Callable[[], pn.viewable.Viewable]) -> str:
+    """One self-contained HTML document (inline JS and CSS) of the layout ``build()`` makes."""
     document = Document()
     # A document of its own even inside a served session (Panel caches stylesheet models per
     # current document), with stylesheet links in CDN form, whatever the session uses.
     with set_curdoc(document), set_resource_mode("cdn"):
-        root = build_report(results, scenario_name).get_root(document)
+        root = build().get_root(document)
     document.add_root(root)
     # INLINE resources inline the JavaScript but Panel still links component stylesheets from
     # its CDN (holoviz/panel#6759); swap them for the packaged files so the file works offline.
@@ -149,6 +159,84 @@ def write_report(results: Results, path: Path, scenario_name: str = "custom") ->
     return path
 
 
+COMPARISON_CSS = """
+table.comparison { border-collapse: collapse; font-size: 13px; }
+table.comparison th, table.comparison td { border: 1px solid #d0d7de; padding: 3px 6px; }
+table.comparison td { text-align: right; }
+table.comparison tbody th { text-align: left; min-width: 10em; }
+table.comparison td:last-child { text-align: left; min-width: 16em; }
+"""
+"""Style of :func:`comparison_html` tables, shared by the dashboard and the session report."""
+
+
+def comparison_html(table: pd.DataFrame) -> str:
+    """HTML of a what-if comparison table (numbers to four significant digits, "–" if absent)."""
+    return table.to_html(
+        float_format=lambda value: f"{value:.4g}",
+        na_rep="–",
+        classes="comparison",
+        border=0,
+        index_names=False,
+    )
+
+
+def build_session_report(session: WhatIfSession, current: Results | None) -> pn.Column:
+    """Panel layout of a what-if session's report: comparison table, every plot with the
+    visible pinned runs overlaid on the current run, and the inputs of every run."""
+    overlays = session.overlays()
+    header = pn.pane.HTML(
+        f"<h1>{REPORT_TITLE}: what-if session</h1>"
+        + report_header("what-if session")
+        + "<p>Pinned runs compared with each other"
+        + (" and with the current run" if current is not None else "")
+        + f". Differences are taken to <b>{html.escape(session.reference)}</b>. Displacements "
+        "are positive downward.</p><h3>Comparison</h3>"
+        + comparison_html(session.comparison(current)),
+        stylesheets=[COMPARISON_CSS],
+        sizing_mode="stretch_width",
+    )
+    figures = pn.GridBox(
+        *[
+            pn.pane.HoloViews(
+                spec.draw(current, overlays=overlays),
+                sizing_mode="stretch_width",
+                css_classes=[f"plot-{spec.key}"],
+            )
+            for spec in plots.PLOTS
+        ],
+        ncols=2,
+        sizing_mode="stretch_width",
+    )
+    runs = [(r.name, r.scenario_json) for r in session.runs]
+    if current is not None:
+        runs.append((CURRENT_LABEL, current.scenario_json))
+    inputs = "".join(
+        f"<details><summary>{html.escape(name)}</summary>"
+        f'<pre class="scenario-json">{html.escape(text)}</pre></details>'
+        for name, text in runs
+    )
+    scenario_block = pn.pane.HTML(
+        f"<h3>Inputs of every run (JSON, SI units except km/h)</h3>{inputs}",
+        sizing_mode="stretch_width",
+    )
+    return pn.Column(header, figures, scenario_block, sizing_mode="stretch_width")
+
+
+def session_report_html(session: WhatIfSession, current: Results | None = None) -> str:
+    """The report of a what-if session as one self-contained HTML document."""
+    return standalone_html(lambda: build_session_report(session, current))
+
+
+def write_session_report(text: str, path: Path) -> Path:
+    """Recompute the runs of a saved session file's ``text`` and write its report to ``path``."""
+    cache = StageCache()  # runs that differ only downstream share their upstream stages
+    session, current_scenario = load_session(text, cache=cache)
+    current = None if current_scenario is None else run(current_scenario, cache=cache)
+    path = Path(path)
+    path.write_text(session_report_html(session, current), encoding="utf-8")
+    return path
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``python -m dashboard.export``."""
     parser = argparse.ArgumentParser(
@@ -156,6 +244,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a scenario and write a self-contained HTML report.",
     )
     add_scenario_arguments(parser)
+    parser.add_argument(
+        "--session",
+        type=Path,
+        help="what-if session file saved by the dashboard: report its runs side by side "
+        "(instead of --scenario and --set)",
+    )
     parser.add_argument("--out", type=Path, required=True, help="HTML file to write")
     return parser
 
@@ -164,6 +258,8 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the process exit code (2 for bad input)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.session is not None:
+        return _session_main(parser, args)
     try:
         scenario = load_scenario(args)
         results = run(scenario, cache=None)
@@ -177,6 +273,18 @@ def main(argv: list[str] | None = None) -> int:
     for warning in results.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     print(f"report written to {args.out}")
+    return 0
+
+
+def _session_main(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``--session``: the report of a saved what-if session."""
+    if args.scenario is not None or args.overrides:
+        parser.error("--session cannot be combined with --scenario or --set")
+    try:
+        write_session_report(args.session.read_text(encoding="utf-8"), args.out)
+    except (ValueError, OSError, SimulationError) as error:
+        parser.exit(2, f"error: {error}\n")
+    print(f"session report written to {args.out}")
     return 0
 
 

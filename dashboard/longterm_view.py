@@ -15,7 +15,7 @@ import numpy as np
 import panel as pn
 import param
 
-from dashboard.plots import _COMMON, MM, PlotSpec
+from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
 from model.longterm import TriaxialData, fit_strain_law, parse_triaxial_csv
 from model.params import LongTerm
 from model.pipeline import Results
@@ -42,7 +42,7 @@ def settlement_time_plot(results: Results) -> hv.Curve:
         vdims=[hv.Dimension("settlement", label="Settlement at the invert", unit="mm")],
         label="Long-term settlement",
     )
-    return curve.opts(title="Long-term settlement", logx=True, line_width=2, **_COMMON)
+    return curve.opts(title="Long-term settlement", logx=True, line_width=2, **PLOT_OPTIONS)
 
 
 def strain_depth_plot(results: Results) -> hv.Overlay:
@@ -56,7 +56,7 @@ def strain_depth_plot(results: Results) -> hv.Overlay:
         title=f"Permanent strain after {results.scenario.longterm.years:g} years",
         invert_yaxis=True,
         legend_position="bottom_right",
-        **_COMMON,
+        **PLOT_OPTIONS,
     )
 
 
@@ -82,7 +82,7 @@ def stress_ratio_depth_plot(results: Results) -> hv.Overlay:
         title="Dynamic deviator over static strength",
         invert_yaxis=True,
         legend_position="bottom_right",
-        **_COMMON,
+        **PLOT_OPTIONS,
     )
 
 
@@ -129,7 +129,7 @@ def calibration_plot(data: TriaxialData, fit: dict[str, float]) -> hv.Overlay:
         logx=True,
         logy=True,
         legend_position="top_left",
-        **_COMMON,
+        **PLOT_OPTIONS,
     )
 
 

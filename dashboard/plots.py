@@ -8,6 +8,7 @@ reader expects (mm, kN, kN/m) and every axis label states its unit.
 from __future__ import annotations
 
 import json
+import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,9 +17,9 @@ import holoviews as hv
 import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used below)
 import numpy as np
 
+from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.params import DATA_DIR, Soil
 from model.pipeline import Results
-from model.settlement import COMPARISON_DEPTH_M
 
 REFERENCE_FILE = DATA_DIR / "paper_reference.json"
 
@@ -31,21 +32,30 @@ PLOT_HEIGHT = 300  # px
 
 # Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
 # falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
-_COMMON = {
+PLOT_OPTIONS = {
     "responsive": True,
     "height": PLOT_HEIGHT,
     "tools": ["hover"],
     "show_grid": True,
+    "framewise": True,
     "backend_opts": {"plot.output_backend": "canvas"},
 }
+"""Options every plot of the dashboard and the report shares."""
 # In the dashboard the same plot is updated with new data and its axes must follow. framewise
 # is a normalisation option of each element: set on an Overlay it is ignored (the axes of the
 # overlaid plots stayed at the first run's ranges), so every layer carries it.
 _FOLLOW_DATA = {"framewise": True}
-_LEGEND_OUTSIDE = {
-    "legend_position": "bottom",
-    "legend_cols": 3,
-}  # below the axes, never over the curves
+_LEGEND_OUTSIDE = {"legend_position": "bottom", "legend_cols": 3}  # never over the curves
+
+
+Overlays = Sequence[tuple[str, Results, str]]
+"""Pinned runs drawn under the current one: ``(label, results, colour)`` each, bottom first."""
+
+CURRENT_LINE_WIDTH = 2.5  # thicker than the pinned runs', so the current run stands out on top
+PINNED_LINE_WIDTH = 1.5
+# With pinned runs, reference lines and points (Winkler beam, the paper's values) are drawn in
+# dark grey so that every colour of the legend names a run.
+REFERENCE_COLOUR = "#555555"
 
 
 @dataclass(frozen=True)
@@ -54,7 +64,8 @@ class PlotSpec:
 
     key: str
     stage: str
-    draw: Callable[[Results], hv.Element]
+    draw: Callable[..., hv.Element]
+    """``draw(results, overlays=())``: the plot of one run, with pinned runs overlaid."""
 
 
 def decimate_min_max(
@@ -98,53 +109,100 @@ def _time_curve(t_s, values, label, value_dim, scale):
     ).opts(**_FOLLOW_DATA)
 
 
-Runs = Results | Sequence[tuple[str, Results]]
-"""One run, or several labelled runs drawn on the same axes (e.g. what-if comparisons)."""
+def run_layers(
+    layer: Callable[[Results, str], hv.Element],
+    results: Results | None,
+    label: str,
+    overlays: Overlays = (),
+) -> list[hv.Element]:
+    """One run's layer, or with pinned runs: theirs in their colours, the current one on top.
+
+    Parameters
+    ----------
+    layer : callable(results, label) -> Element
+        Draws one run's curve.
+    results : Results or None
+        The current run (None: only the pinned runs, e.g. a report of a saved session).
+    label : str
+        Legend name of the current run when nothing is overlaid.
+    overlays : sequence of (label, Results, colour)
+        Pinned runs, drawn in this order under the current run.
+    """
+    if not overlays:
+        return [] if results is None else [layer(results, label)]
+    pinned = [_pinned_layer(layer, run, name, colour) for name, run, colour in overlays]
+    if results is None:
+        return pinned
+    current = layer(results, CURRENT_LABEL).opts(
+        color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
+    )
+    return [*pinned, current]
 
 
-def _labelled(runs: Runs) -> list[tuple[str | None, Results]]:
-    """``[(None, results)]`` for one run, else the (label, results) pairs."""
-    return [(None, runs)] if isinstance(runs, Results) else list(runs)
+_PINNED_LAYERS: dict[tuple, tuple[weakref.ref, hv.Element]] = {}
+"""Layers of pinned runs by (id(results), layer, name, colour), each dropped with its Results."""
 
 
-def _combine(layers: list[hv.Element], **opts) -> hv.Element:
-    """One layer as it is, several as an overlay with the legend below the axes."""
-    if len(layers) == 1:
-        return layers[0].opts(**opts, **_COMMON)
-    return hv.Overlay(layers).opts(**opts, **_LEGEND_OUTSIDE, **_COMMON)
+def _pinned_layer(layer, results: Results, name: str, colour: str) -> hv.Element:
+    """A pinned run's layer, built once: a pinned run never changes, and the very same element
+    lets a plot updated in place skip re-sending its data to the browser."""
+    key = (id(results), layer.__qualname__, name, colour)
+    cached = _PINNED_LAYERS.get(key)
+    if cached is not None and cached[0]() is results:
+        return cached[1]
+    element = layer(results, name).opts(color=colour, line_width=PINNED_LINE_WIDTH)
+    _PINNED_LAYERS[key] = (weakref.ref(results), element)
+    weakref.finalize(results, _PINNED_LAYERS.pop, key, None)
+    return element
 
 
-def block_displacement_plot(runs: Runs) -> hv.Overlay:
-    """Monitored block (sleeper) displacement against time, with the Winkler-beam curve."""
-    disp = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
-    layers = []
-    for label, results in _labelled(runs):
+def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Element:
+    """The current run's layer alone, or with pinned runs an Overlay with its legend outside."""
+    if not overlays:
+        return layers[0].opts(**opts, **PLOT_OPTIONS)
+    return hv.Overlay(layers).opts(**opts, **_LEGEND_OUTSIDE, **PLOT_OPTIONS)
+
+
+BLOCK_DISP = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
+
+
+def _block_disp_curve(results: Results, label: str) -> hv.Curve:
+    """Simulated block displacement of one run."""
+    vt = results.vehicle_track
+    return _time_curve(vt.t_s, vt.block_disp_m, label, BLOCK_DISP, MM).opts(line_width=1.5)
+
+
+def block_displacement_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Overlay:
+    """Monitored block (sleeper) displacement against time, with the Winkler-beam curve of the
+    current run; pinned runs (``overlays``) are drawn under it."""
+    layers = run_layers(_block_disp_curve, results, "Vehicle–track model", overlays)
+    if results is not None:
         vt = results.vehicle_track
-        model = "Vehicle–track model" if label is None else label
-        winkler = "Winkler beam (BOEF)" if label is None else f"{label}: Winkler beam"
-        layers.append(_time_curve(vt.t_s, vt.block_disp_m, model, disp, MM).opts(line_width=1.5))
-        layers.append(
-            _time_curve(vt.t_s, vt.winkler_block_disp_m, winkler, disp, MM).opts(
-                line_dash="dashed", line_width=1.5
-            )
+        winkler = _time_curve(
+            vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", BLOCK_DISP, MM
         )
-    return _combine(layers, title="Sleeper (block) displacement")
+        if overlays:
+            winkler = winkler.opts(color=REFERENCE_COLOUR)
+        layers.append(winkler.opts(line_dash="dashed", line_width=1.5))
+    return hv.Overlay(layers).opts(
+        title="Sleeper (block) displacement",
+        **_LEGEND_OUTSIDE,
+        **PLOT_OPTIONS,
+    )
 
 
-def invert_load_plot(runs: Runs) -> hv.Element:
-    """Force into the tunnel invert under the monitored block against time."""
+def _invert_load_curve(results: Results, label: str) -> hv.Curve:
+    """Force into the invert under the monitored block of one run."""
     force = hv.Dimension("block_force", label="Force into the invert per block", unit="kN")
-    layers = [
-        _time_curve(
-            results.vehicle_track.t_s,
-            results.vehicle_track.block_force_N,
-            "Invert load" if label is None else label,
-            force,
-            KN,
-        )
-        for label, results in _labelled(runs)
-    ]
-    return _combine(layers, title="Invert load")
+    vt = results.vehicle_track
+    return _time_curve(vt.t_s, vt.block_force_N, label, force, KN)
+
+
+def invert_load_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Curve | hv.Overlay:
+    """Force into the tunnel invert under the monitored block against time (a Curve; an
+    Overlay with pinned runs)."""
+    layers = run_layers(_invert_load_curve, results, "Invert load", overlays)
+    return _overlaid(layers, overlays, title="Invert load")
 
 
 def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
@@ -160,38 +218,33 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
     ).opts(**_FOLLOW_DATA)
 
 
-def load_psd_plot(runs: Runs) -> hv.Element:
-    """One-sided PSD of the line load on the tunnel section."""
+def _load_psd_curve(results: Results, label: str) -> hv.Curve:
+    """Line-load PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("load_psd", label="PSD", unit="(kN/m)²/Hz")
-    layers = [
-        _psd_curve(
-            results.load.f_hz,
-            results.load.psd,
-            dim,
-            KN**2,
-            "Line load" if label is None else label,
-            results.scenario.numerics.soil_max_frequency,
-        )
-        for label, results in _labelled(runs)
-    ]
-    return _combine(layers, title="Invert line-load PSD", logy=True)
+    top = results.scenario.numerics.soil_max_frequency
+    return _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, label, top)
 
 
-def interface_psd_plot(runs: Runs) -> hv.Element:
-    """One-sided PSD of the displacement at the ring–soil interface under the invert."""
+def load_psd_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Curve | hv.Overlay:
+    """One-sided PSD of the line load on the tunnel section (an Overlay with pinned runs)."""
+    layers = run_layers(_load_psd_curve, results, "Line load", overlays)
+    return _overlaid(layers, overlays, title="Invert line-load PSD", logy=True)
+
+
+def _interface_psd_curve(results: Results, label: str) -> hv.Curve:
+    """Interface displacement PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("interface_psd", label="PSD", unit="mm²/Hz")
-    layers = [
-        _psd_curve(
-            results.soil.f_hz,
-            results.soil.interface_psd,
-            dim,
-            MM**2,
-            "Ring–soil interface" if label is None else label,
-            results.scenario.numerics.soil_max_frequency,
-        )
-        for label, results in _labelled(runs)
-    ]
-    return _combine(layers, title="Interface displacement PSD", logy=True)
+    top = results.scenario.numerics.soil_max_frequency
+    return _psd_curve(results.soil.f_hz, results.soil.interface_psd, dim, MM**2, label, top)
+
+
+def interface_psd_plot(
+    results: Results | None, *, overlays: Overlays = ()
+) -> hv.Curve | hv.Overlay:
+    """One-sided PSD of the displacement at the ring–soil interface under the invert (an
+    Overlay with pinned runs)."""
+    layers = run_layers(_interface_psd_curve, results, "Ring–soil interface", overlays)
+    return _overlaid(layers, overlays, title="Interface displacement PSD", logy=True)
 
 
 def paper_reference(path: Path = REFERENCE_FILE) -> list[dict]:
@@ -200,35 +253,42 @@ def paper_reference(path: Path = REFERENCE_FILE) -> list[dict]:
         return json.load(handle)["series"]
 
 
-def depth_profile_plot(runs: Runs, reference: list[dict] | None = None) -> hv.Overlay:
-    """Peak dynamic displacement against depth below the invert, with the paper's points."""
+DEPTH = hv.Dimension("depth", label="Depth below the invert", unit="m")
+PEAK_DISP = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
+
+
+def _depth_curve(results: Results, label: str) -> hv.Curve:
+    """Peak displacement against depth of one run."""
+    soil = results.soil
+    return hv.Curve(
+        (soil.peak_disp_m * MM, soil.depth_m), kdims=[PEAK_DISP], vdims=[DEPTH], label=label
+    ).opts(line_width=2, **_FOLLOW_DATA)
+
+
+def depth_profile_plot(
+    results: Results | None, reference: list[dict] | None = None, *, overlays: Overlays = ()
+) -> hv.Overlay:
+    """Peak dynamic displacement against depth below the invert, with the paper's points;
+    pinned runs (``overlays``) are drawn under the current run."""
     reference = paper_reference() if reference is None else reference
-    depth = hv.Dimension("depth", label="Depth below the invert", unit="m")
-    peak = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
-    layers = [
-        hv.Curve(
-            (results.soil.peak_disp_m * MM, results.soil.depth_m),
-            kdims=[peak],
-            vdims=[depth],
-            label="This model" if label is None else label,
-        ).opts(line_width=2, **_FOLLOW_DATA)
-        for label, results in _labelled(runs)
-    ]
+    layers = run_layers(_depth_curve, results, "This model", overlays)
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):
         points = hv.Scatter(
             (np.asarray(series["peak_disp_m"]) * MM, series["depth_m"]),
-            kdims=[peak],
-            vdims=[depth],
+            kdims=[PEAK_DISP],
+            vdims=[DEPTH],
             label=series["label"],
         )
+        if overlays:
+            points = points.opts(color=REFERENCE_COLOUR)
         layers.append(points.opts(marker=marker, size=10, **_FOLLOW_DATA))
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        padding=0.05,
         **_LEGEND_OUTSIDE,
-        **_COMMON,
+        padding=0.05,
+        **PLOT_OPTIONS,
     )
 
 
@@ -280,12 +340,7 @@ def summary_items(results: Results) -> list[SummaryItem]:
             s["peak_disp_invert_m"] * MM,
             "mm",
         ),
-        SummaryItem(
-            "peak_disp_11m",
-            f"… {COMPARISON_DEPTH_M:g} m below the invert",
-            s["peak_disp_11m_m"] * MM,
-            "mm",
-        ),
+        SummaryItem("peak_disp_11m", "… 11 m below the invert", s["peak_disp_11m_m"] * MM, "mm"),
         SummaryItem(
             "peak_disp_deepest",
             f"… {deepest:g} m below the invert",

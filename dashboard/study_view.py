@@ -26,7 +26,7 @@ import param
 from bokeh.models import PrintfTickFormatter
 from holoviews.streams import Pipe
 
-from dashboard.plots import _COMMON, MM
+from dashboard.plots import MM, PLOT_OPTIONS
 from model.params import SECTIONS, Scenario
 from model.study import MAX_RUNS_UNCONFIRMED, aggregate, profile_depths, run_study
 
@@ -88,9 +88,9 @@ def band_plot(bands: pd.DataFrame, path: str, key: str) -> hv.Overlay:
     value = hv.Dimension("value_mm", label=RESULTS[key], unit="mm")
     area = hv.Area(
         (x, low, high), kdims=[_dimension(path)], vdims=[value, "high"], label="5–95 % of seeds"
-    ).opts(**_COMMON, alpha=0.3, line_width=0)
+    ).opts(**PLOT_OPTIONS, alpha=0.3, line_width=0)
     curve = hv.Curve((x, mean), kdims=[_dimension(path)], vdims=[value], label="mean")
-    return (area * curve.opts(**_COMMON)).opts(title=RESULTS[key])
+    return (area * curve.opts(**PLOT_OPTIONS)).opts(title=RESULTS[key])
 
 
 def heat_map(bands: pd.DataFrame, path_x: str, path_y: str, key: str) -> hv.HeatMap:
@@ -113,7 +113,7 @@ def heat_map(bands: pd.DataFrame, path_x: str, path_y: str, key: str) -> hv.Heat
         hv.Dimension("p05", label="5 %", unit="mm"),
         hv.Dimension("p95", label="95 %", unit="mm"),
     ]
-    options = {k: v for k, v in _COMMON.items() if k != "show_grid"}
+    options = {k: v for k, v in PLOT_OPTIONS.items() if k != "show_grid"}
     return hv.HeatMap(data, kdims=kdims, vdims=vdims).opts(
         **options, colorbar=True, cmap="viridis", title=f"{RESULTS[key]}, mean of seeds"
     )
@@ -136,10 +136,10 @@ def depth_envelope_plot(table: pd.DataFrame) -> hv.Overlay:
         ],
         kdims=kdims + vdims,
         label="5–95 % of runs",
-    ).opts(**{k: v for k, v in _COMMON.items() if k != "tools"}, alpha=0.3, line_width=0)
+    ).opts(**{k: v for k, v in PLOT_OPTIONS.items() if k != "tools"}, alpha=0.3, line_width=0)
     envelope = hv.Curve((peaks.max(axis=0), depth), kdims=kdims, vdims=vdims, label="envelope")
     median = hv.Curve((np.median(peaks, axis=0), depth), kdims=kdims, vdims=vdims, label="median")
-    return (band * envelope.opts(**_COMMON) * median.opts(**_COMMON)).opts(
+    return (band * envelope.opts(**PLOT_OPTIONS) * median.opts(**PLOT_OPTIONS)).opts(
         title="Depth profile across the study", invert_yaxis=True
     )
 

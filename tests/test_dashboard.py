@@ -133,28 +133,6 @@ def test_depth_plot_overlays_both_paper_series_separately(results):
     np.testing.assert_allclose(conclusions.dimension_values(1), [0.0, 35.0])
 
 
-def test_plots_overlay_several_labelled_runs(results, cache, cheap_scenario):
-    """A list of (label, Results) draws one curve per run, each with its run's own numbers."""
-    slower = cheap_scenario()
-    slower.train.speed_kmh = 80.0
-    runs = [("100 km/h", results), ("80 km/h", run(slower, cache=cache))]
-    loads = _curves(plots.invert_load_plot(runs))
-    assert set(loads) == {"100 km/h", "80 km/h"}
-    for label, res in runs:
-        assert loads[label].dimension_values(1).max() == pytest.approx(
-            res.summary()["peak_invert_force_N"] / 1e3, rel=1e-12
-        )
-    assert set(_curves(plots.block_displacement_plot(runs))) == {
-        "100 km/h",
-        "100 km/h: Winkler beam",
-        "80 km/h",
-        "80 km/h: Winkler beam",
-    }
-    assert {"100 km/h", "80 km/h", "Paper Fig. 11"} <= set(_curves(plots.depth_profile_plot(runs)))
-    for draw in (plots.load_psd_plot, plots.interface_psd_plot):
-        assert set(_curves(draw(runs))) == {"100 km/h", "80 km/h"}
-
-
 def test_reference_data_is_found_from_any_working_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert [s["label"] for s in plots.paper_reference()] == ["Paper Fig. 11", "Paper conclusions"]

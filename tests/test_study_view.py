@@ -101,7 +101,7 @@ def test_one_parameter_study_draws_mean_and_band(view):
     assert view.progress.value == 4 == view.progress.max
     table = view.table
     bands = aggregate(table)
-    band, depth = (pane.object[()] for pane in view.plots.objects)
+    band, depth = view.plots.objects[0].object[()], view.plots.objects[-1].object[()]
     area, curve = band.values()
     np.testing.assert_array_equal(curve.dimension_values(1), bands["peak_disp_invert_m_mean"] * 1e3)
     np.testing.assert_array_equal(area.dimension_values(1), bands["peak_disp_invert_m_p05"] * 1e3)

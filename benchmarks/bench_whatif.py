@@ -1,0 +1,210 @@
+"""What-if sessions: the cost of pinning and of drawing every plot with 8 pinned runs.
+
+Panel-free part (always run), on one run of the ``paper`` preset (six-car train, ~70 000 time
+samples per history):
+
+* pin: :meth:`WhatIfSession.pin` of a finished run (no recomputation: it stores the Results
+  and takes their summary once);
+* plot building: every function of ``dashboard.plots.PLOTS`` drawing the current run alone and
+  with 8 pinned runs overlaid, as HoloViews elements, and rendered to Bokeh models (what the
+  server builds when a plot is replaced, e.g. after pinning); best of ``--repeat``;
+* in-place update: what the served dashboard does on a slider change, every plot's
+  DynamicMap sent new Results through its Pipe stream (the current run alternates between two
+  runs that differ in the soil), HoloViews updating the Bokeh models; best of ``--repeat``.
+
+The 8 pinned runs are the same Results object pinned under 8 names: drawing cost depends on
+the array sizes, not the values. A pinned run's layers are built once and reused (see
+``plots._pinned_layer``), so the figures are for a redraw after the first.
+
+Browser part (``--browser``; needs ``dashboard/app.py`` to use WhatIfPanel): in headless Debian
+Chromium, the time from entering a new soil Young's modulus (paper preset) or speed (single
+bogie) until the plots show the new data, with the 8 pinned runs hidden and shown, alternately,
+in the same page and server (the issue's target: with 8 pinned runs no more than 20 % slower).
+Usage::
+
+    python benchmarks/bench_whatif.py [--repeat 5] [--browser]
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+
+import holoviews as hv  # noqa: E402
+from holoviews.streams import Pipe  # noqa: E402
+
+from dashboard import plots  # noqa: E402
+from dashboard.whatif import MAX_PINNED, WhatIfSession  # noqa: E402
+from model.params import Scenario  # noqa: E402
+from model.pipeline import run  # noqa: E402
+
+
+def best_of(repeat: int, action) -> float:
+    """Smallest wall time of ``repeat`` calls of ``action()`` (s)."""
+    samples = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        action()
+        samples.append(time.perf_counter() - start)
+    return min(samples)
+
+
+def panel_free(repeat: int) -> None:
+    """Pin cost and plot-building time with 0 and 8 pinned runs."""
+    start = time.perf_counter()
+    results = run(Scenario.paper(), cache=None)
+    print(f"paper run computed in {time.perf_counter() - start:.1f} s (not part of the figures)")
+
+    def pin_once():
+        WhatIfSession().pin(results, "pinned")
+
+    print(
+        f"{'pin one run (paper, no recomputation)':<58} {best_of(repeat, pin_once) * 1e3:8.2f} ms"
+    )
+    session = WhatIfSession()
+    for k in range(MAX_PINNED):
+        session.pin(results, f"run {k + 1}")
+    overlays = session.overlays()
+
+    def draw(pinned):
+        return lambda: [spec.draw(results, overlays=pinned) for spec in plots.PLOTS]
+
+    def render(pinned):
+        return lambda: [hv.render(element) for element in draw(pinned)()]
+
+    softer = Scenario.paper()
+    softer.soil.youngs_modulus = 5e6
+    other = run(softer, cache=None)
+
+    def update(pinned):
+        """A callable that sends the next current run to every plot, as a slider change does."""
+        streams, figures = [], []  # the plots are kept alive: they subscribe to the streams
+        for spec in plots.PLOTS:
+            stream = Pipe(data=results)
+            dmap = hv.DynamicMap(
+                lambda data, draw=spec.draw: draw(data, overlays=pinned), streams=[stream]
+            )
+            figures.append(hv.renderer("bokeh").get_plot(dmap))
+            streams.append(stream)
+        currents = itertools.cycle((other, results))
+
+        def send():
+            data = next(currents)
+            for stream in streams:
+                stream.send(data)
+
+        send.figures = figures
+        return send
+
+    print(f"{'every plot (5), best of ' + str(repeat):<58} {'0 pinned':>11} {'8 pinned':>11} ratio")
+    for name, build in (
+        ("HoloViews elements", draw),
+        ("elements rendered to Bokeh", render),
+        ("in-place update through the streams (slider change)", update),
+    ):
+        alone, pinned = best_of(repeat, build(())), best_of(repeat, build(overlays))
+        print(f"{name:<58} {alone * 1e3:8.1f} ms {pinned * 1e3:8.1f} ms {pinned / alone:5.2f}")
+
+
+def browser(repeat: int) -> None:
+    """Slider-change response in the browser with the 8 pinned runs hidden and shown."""
+    from playwright.sync_api import sync_playwright
+    from test_browser import (
+        STAGE_OF_PLOT,
+        launch_chromium,
+        open_dashboard,
+        render_counts,
+        serve_app,
+        signatures,
+        type_value,
+        wait_for_new_data,
+    )
+    from test_browser_whatif import WIRED
+
+    if not WIRED:
+        print("browser part skipped: dashboard/app.py does not use WhatIfPanel yet")
+        return
+    from bench_dashboard import PAINTED_JS, warm_numba_caches
+
+    def timed_change(page, path, value, stages):
+        counts, before = render_counts(page), signatures(page)
+        titles = [title for title, stage in STAGE_OF_PLOT.items() if stage in stages]
+        start = time.perf_counter()
+        type_value(page, path, value)
+        for stage in stages:
+            page.locator(
+                f'.stage-status[data-stage="{stage}"][data-renders="{counts[stage] + 1}"]'
+            ).wait_for(timeout=300_000)
+        wait_for_new_data(page, before, titles)
+        page.evaluate(PAINTED_JS)
+        return time.perf_counter() - start
+
+    def set_shown(page, shown: bool):
+        for box in page.locator(".whatif-run input[type=checkbox]").all():
+            if box.is_checked() != shown:
+                box.click()
+                page.wait_for_timeout(300)
+        page.wait_for_timeout(1500)  # the plots are rebuilt after each visibility change
+        page.evaluate(PAINTED_JS)
+
+    cases = [
+        ("preset=paper", "soil.youngs_modulus", lambda i: f"{7e6 + 1e5 * i:g}", ("soil",)),
+        (
+            "preset=single_bogie",
+            "train.speed_kmh",
+            lambda i: f"{70 + 0.5 * i:g}",
+            ("vehicle_track", "load", "soil"),
+        ),
+    ]
+    warm_numba_caches()
+    with sync_playwright() as playwright, tempfile.TemporaryDirectory() as tmp:
+        chromium = launch_chromium(playwright)
+        with serve_app(Path(tmp) / "panel.log") as url:
+            for query, path, value, stages in cases:
+                page = chromium.new_page(viewport={"width": 1400, "height": 1400})
+                open_dashboard(page, url, query)
+                for k in range(MAX_PINNED):
+                    page.locator(".whatif-name input").fill(f"run {k + 1}")
+                    page.locator(".whatif-name input").press("Tab")
+                    page.locator(".whatif-pin button").click()
+                    page.locator(".whatif-run").nth(k).wait_for(timeout=60_000)
+                samples = {0: [], MAX_PINNED: []}
+                for i in range(repeat):
+                    for shown in (False, True):
+                        set_shown(page, shown)
+                        n = MAX_PINNED if shown else 0
+                        samples[n].append(timed_change(page, path, value(2 * i + shown), stages))
+                page.close()
+                alone, pinned = samples[0], samples[MAX_PINNED]
+                print(
+                    f"{path} change ({query}): 0 pinned best {min(alone):.2f} s median "
+                    f"{statistics.median(alone):.2f} s; 8 pinned best {min(pinned):.2f} s median "
+                    f"{statistics.median(pinned):.2f} s; ratio of medians "
+                    f"{statistics.median(pinned) / statistics.median(alone):.2f} (target ≤ 1.2)"
+                )
+                print("  samples 0 pinned:", ", ".join(f"{v:.2f}" for v in alone))
+                print("  samples 8 pinned:", ", ".join(f"{v:.2f}" for v in pinned))
+        chromium.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=5, help="samples per figure")
+    parser.add_argument("--browser", action="store_true", help="also time the served dashboard")
+    args = parser.parse_args(argv)
+    panel_free(args.repeat)
+    if args.browser:
+        browser(args.repeat)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
