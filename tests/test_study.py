@@ -338,14 +338,18 @@ def nothing_computed(monkeypatch):
     [
         ({"train.speedkmh": [60]}, {}, "unknown parameter 'train.speedkmh'"),
         ({"trian.speed_kmh": [60]}, {}, "not of the form section.parameter"),
-        ({"train.speed_kmh": [60, 500]}, {}, "outside the allowed range (0, 400]"),
+        ({"train.speed_kmh": [60, 500]}, {}, "outside the allowed range [1, 400]"),
         ({"soil.youngs_modulus": (-1.0, 1e7)}, {"sampling": "lhs", "n_samples": 4}, "-1.0"),
         ({"train.speed_kmh": []}, {}, "the grid is empty"),
         ({"train.speed_kmh": [60]}, {"seeds": []}, "seeds is empty"),
         ({"irregularity.seed": [1, 2]}, {}, "varied through seeds"),
         ({"train.single_bogie": None}, {"sampling": "random", "n_samples": 3}, "not a number"),
         ({"train.speed_kmh": None}, {"sampling": "lhs"}, "n_samples = None"),
-        ({"numerics.dt": [1e-4, 0.01]}, {}, "at numerics.dt = 0.01: numerics.dt = 0.01 s is above"),
+        (
+            {"numerics.dt": [1e-4, 9e-4]},
+            {},
+            "at numerics.dt = 0.0009: numerics.dt = 0.0009 s is above",
+        ),
     ],
 )
 def test_bad_study_is_one_line_error(cheap_scenario, nothing_computed, vary, kwargs, message):
