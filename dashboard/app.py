@@ -27,7 +27,10 @@ from holoviews.streams import Pipe
 from dashboard import plots
 from dashboard.controls import ParameterControl
 from dashboard.export import ITEMS_CSS, items_html, report_html
+from dashboard.longterm_view import LONGTERM_PLOTS, CalibrationPanel, law_statement
 from dashboard.scheduler import EXECUTOR, LatestRun, warm_up
+from dashboard.study_view import StudyView
+from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
 from model.params import SECTIONS, Scenario, ScenarioError
 from model.pipeline import STAGES, Results, SimulationError, StageCache, run, stage_keys
@@ -54,6 +57,12 @@ GROUP_TITLES = {
 
 HIDDEN = {"irregularity.profile_csv"}
 """Not offered as a control: a measured profile is a server-side file; set it in a scenario file."""
+
+ALL_PLOTS = (*plots.PLOTS, *LONGTERM_PLOTS)
+"""Every plot of the page: the passage plots, then the long-term ones."""
+
+OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
+"""The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
 
 STAGE_NAMES = {"vehicle_track": "vehicle–track", "longterm": "long-term settlement"}
 """Stage names as shown, where they differ from the pipeline's."""
@@ -99,11 +108,17 @@ def _note_html(text: str) -> str:
     return f'<div style="font-size: 12px; color: #57606a">{html.escape(text)}</div>'
 
 
-def _dynamic(draw):
-    """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``)."""
+def _dynamic(spec: plots.PlotSpec, overlays, other_model):
+    """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``), with the
+    pinned runs (``overlays()``) on the passage plots and the other tunnel–soil model's
+    profile (``other_model()``) on the depth plot."""
 
     def callback(data):
-        return draw(data)
+        if spec.key == plots.MODEL_COMPARISON_PLOT:
+            return spec.draw(data, overlays=overlays(), other_model=other_model())
+        if spec in plots.PLOTS:
+            return spec.draw(data, overlays=overlays())
+        return spec.draw(data)
 
     return callback
 
@@ -148,6 +163,8 @@ class Dashboard(pn.viewable.Viewer):
         self.cache = cache if cache is not None else StageCache()
         self.warm = warm
         self.results: Results | None = None
+        self.other_model: Results | None = None
+        """The same scenario with the other tunnel–soil model, drawn faint on the depth plot."""
         self.render_counts = dict.fromkeys(STAGES, 0)
         self.runs = LatestRun(self._compute, executor)
         self._shown_keys: dict[str, str] = {}
@@ -233,16 +250,46 @@ class Dashboard(pn.viewable.Viewer):
                 styles={"flex": "1 1 440px"},
                 css_classes=["plot", f"plot-{spec.key}", f"stage-{spec.stage}"],
             )
-            for spec in plots.PLOTS
+            for spec in ALL_PLOTS
         }
+        self.whatif = WhatIfPanel(
+            current=lambda: (self.scenario, self.results),
+            restore=self._replace_scenario,
+            compute=lambda scenario: run(scenario, cache=self.cache),
+            preset=lambda: self.preset_select.value,
+        )
+        self.whatif.param.watch(self._redraw_overlays, "overlays_changed")
+        self.law_statement = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.calibration = CalibrationPanel(longterm=self.scenario.longterm)
+        self.study = StudyView(scenario_source=lambda: self.scenario.copy())
         self.views: dict[str, pn.viewable.Viewable] = {
             "Passage": pn.Column(
                 self.summary,
                 self.soil_summary,
-                pn.FlexBox(*self.plot_panes.values(), sizing_mode="stretch_width"),
+                pn.FlexBox(
+                    *[self.plot_panes[spec.key] for spec in plots.PLOTS],
+                    sizing_mode="stretch_width",
+                ),
+                pn.Card(self.whatif, title="What-if: pinned runs", sizing_mode="stretch_width"),
                 sizing_mode="stretch_width",
                 name="Passage",
-            )
+            ),
+            "Long-term settlement": pn.Column(
+                self.law_statement,
+                pn.FlexBox(
+                    *[self.plot_panes[spec.key] for spec in LONGTERM_PLOTS],
+                    sizing_mode="stretch_width",
+                ),
+                pn.Card(
+                    self.calibration,
+                    title="Calibrate the strain law",
+                    collapsed=True,
+                    sizing_mode="stretch_width",
+                ),
+                sizing_mode="stretch_width",
+                name="Long-term settlement",
+            ),
+            "Study": self.study,
         }
         """Main-area views by tab title; :meth:`add_view` adds one."""
         self.tabs = pn.Tabs(*self.views.items(), sizing_mode="stretch_width", dynamic=True)
@@ -358,7 +405,7 @@ class Dashboard(pn.viewable.Viewer):
         for pane in self.plot_panes.values():
             pane.object = None
         self.plot_streams.clear()
-        self.results = None
+        self.results = self.other_model = None
 
     # ---- editing ----------------------------------------------------------------------------
     def _on_parameter(self, *events: param.parameterized.Event) -> None:
@@ -468,7 +515,7 @@ class Dashboard(pn.viewable.Viewer):
         if self.warm is not None and not self.warm.done():
             self.status.object = PREPARING
         stale = self._stale_stages(scenario)
-        for spec in plots.PLOTS:
+        for spec in ALL_PLOTS:
             if spec.stage in stale:
                 self.plot_panes[spec.key].loading = True
 
@@ -491,29 +538,38 @@ class Dashboard(pn.viewable.Viewer):
                 f'<span class="computing">Computing {_stage_name(stage)}… {fraction:.0%}</span>'
             )
 
-    def _compute(self, scenario: Scenario) -> Results:
-        """Run the pipeline with the app's cache (in a worker thread)."""
+    def _compute(self, scenario: Scenario) -> tuple[Results, Results | None]:
+        """Run the pipeline with the app's cache (in a worker thread), then the same scenario
+        with the other tunnel–soil model (its vehicle–track and load stages come from the
+        cache; a failure of that comparison only leaves its curve out)."""
         if self.warm is not None:
             self.warm.result()  # the kernels compile once, not once per waiting session
-        return run(scenario, progress=self._note_progress, cache=self.cache)
+        results = run(scenario, progress=self._note_progress, cache=self.cache)
+        other = scenario.copy()
+        other.tunnel.model = OTHER_MODEL[scenario.tunnel.model]
+        try:
+            return results, run(other, cache=self.cache)
+        except (ValueError, SimulationError):
+            return results, None
 
-    def _finish(self, scenario: Scenario, outcome: Results | BaseException) -> None:
+    def _finish(
+        self, scenario: Scenario, outcome: tuple[Results, Results | None] | BaseException
+    ) -> None:
         """Show a run's results (redrawing only the plots whose stage changed) or its error."""
         self.progress.param.update(visible=False, active=False)
         if isinstance(outcome, BaseException):
             self._show_failure(outcome)
             return
-        results = outcome
+        results, self.other_model = outcome
         redrawn = self._stale_stages(results.scenario)
-        for spec in plots.PLOTS:
+        for spec in ALL_PLOTS:
             pane = self.plot_panes[spec.key]
             if spec.stage in redrawn:
                 stream = self.plot_streams.get(spec.key)
                 if stream is None:
                     # the first results create the plot; later ones update its data in place,
                     # which is far cheaper on both ends than replacing the Bokeh figure
-                    stream = self.plot_streams[spec.key] = Pipe(data=results)
-                    pane.object = hv.DynamicMap(_dynamic(spec.draw), streams=[stream])
+                    self._new_plot(spec, results)
                 else:
                     stream.send(results)
             pane.loading = False
@@ -528,7 +584,23 @@ class Dashboard(pn.viewable.Viewer):
             visible=bool(results.warnings),
         )
         self.status.object = self._status_html(results)
+        self.law_statement.object = law_statement(results)
         self.report_button.disabled = False
+        self.whatif.refresh()
+
+    def _new_plot(self, spec: plots.PlotSpec, results: Results) -> None:
+        """A new plot of ``results``; its stream then updates it in place."""
+        stream = self.plot_streams[spec.key] = Pipe(data=results)
+        self.plot_panes[spec.key].object = hv.DynamicMap(
+            _dynamic(spec, self.whatif.overlays, lambda: self.other_model), streams=[stream]
+        )
+
+    def _redraw_overlays(self, _event=None) -> None:
+        """The pinned runs changed: new passage plots (a plot's set of curves is fixed when
+        it is first drawn)."""
+        if self.results is not None:
+            for spec in plots.PLOTS:
+                self._new_plot(spec, self.results)
 
     def _show_failure(self, error: BaseException) -> None:
         """A failed run: its message in the page, the previous results kept."""

@@ -56,6 +56,7 @@ PINNED_LINE_WIDTH = 1.5
 # With pinned runs, reference lines and points (Winkler beam, the paper's values) are drawn in
 # dark grey so that every colour of the legend names a run.
 REFERENCE_COLOUR = "#555555"
+OTHER_MODEL_COLOUR = "#888888"  # the other tunnel–soil model: faint, behind the runs
 
 
 @dataclass(frozen=True)
@@ -265,13 +266,36 @@ def _depth_curve(results: Results, label: str) -> hv.Curve:
     ).opts(line_width=2, **_FOLLOW_DATA)
 
 
+MODEL_NAMES = {"2d": "2D section", "2.5d": "2.5D moving load"}
+"""Legend names of the tunnel–soil models."""
+
+MODEL_COMPARISON_PLOT = "depth_profile"
+"""The plot that also draws the other tunnel–soil model's profile (``other_model``)."""
+
+
 def depth_profile_plot(
-    results: Results | None, reference: list[dict] | None = None, *, overlays: Overlays = ()
+    results: Results | None,
+    reference: list[dict] | None = None,
+    *,
+    overlays: Overlays = (),
+    other_model: Results | None = None,
 ) -> hv.Overlay:
     """Peak dynamic displacement against depth below the invert, with the paper's points;
-    pinned runs (``overlays``) are drawn under the current run."""
+    pinned runs (``overlays``) are drawn under the current run, and ``other_model`` (the same
+    scenario with the other tunnel–soil model) as a faint dashed curve."""
     reference = paper_reference() if reference is None else reference
-    layers = run_layers(_depth_curve, results, "This model", overlays)
+    current_label = "This model"
+    if other_model is not None and results is not None:
+        current_label = MODEL_NAMES[results.scenario.tunnel.model]
+    layers = run_layers(_depth_curve, results, current_label, overlays)
+    if other_model is not None:
+        name = MODEL_NAMES[other_model.scenario.tunnel.model]
+        layers.insert(
+            0,
+            _depth_curve(other_model, name).opts(
+                color=OTHER_MODEL_COLOUR, line_dash="dashed", line_width=1.5, alpha=0.6
+            ),
+        )
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):
         points = hv.Scatter(

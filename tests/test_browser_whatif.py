@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import re
 import time
-from pathlib import Path
 
 import pytest
 from test_browser import (
@@ -34,14 +33,9 @@ from dashboard.whatif import CURRENT_LABEL, WhatIfSession
 from model.params import Scenario
 from model.pipeline import StageCache, run
 
-ROOT = Path(__file__).resolve().parent.parent
-WIRED = "WhatIfPanel" in (ROOT / "dashboard" / "app.py").read_text(encoding="utf-8")
-
 pytestmark = [
     pytest.mark.browser,
     pytest.mark.slow,
-    # until the lead wires the component into app.py (a transitional guard: delete it then)
-    pytest.mark.skipif(not WIRED, reason="dashboard/app.py does not use WhatIfPanel yet"),
 ]
 
 PINNED = "today"

@@ -23,6 +23,7 @@ from dashboard import plots
 from dashboard.app import HIDDEN, PRIMARY, SWITCHES, Dashboard
 from dashboard.export import main as export_main
 from dashboard.export import package_version, report_html
+from dashboard.longterm_view import LONGTERM_PLOTS
 from model import scenarios
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.pipeline import STAGES, StageCache, run
@@ -418,13 +419,34 @@ def test_query_arguments_choose_preset_and_overrides(cache):
     assert bad.preset_select.value == "paper"
 
 
-def test_added_view_becomes_a_tab(dashboard):
-    view = pn.pane.Markdown("long-term")
-    dashboard.add_view("Long-term settlement", view)
+def test_views_are_tabs_and_an_added_view_becomes_one(dashboard):
+    dashboard.add_view("Notes", pn.pane.Markdown("notes"))
     assert [title for title, _ in zip(dashboard.tabs._names, dashboard.tabs, strict=True)] == [
         "Passage",
         "Long-term settlement",
+        "Study",
+        "Notes",
     ]
+
+
+def test_long_term_view_shows_the_law_and_its_plots(dashboard):
+    """The long-term tab states the law that produced the numbers and draws each plot."""
+    assert "Li & Selig" in dashboard.law_statement.object
+    for spec in LONGTERM_PLOTS:
+        assert dashboard.plot_panes[spec.key].object is not None, spec.key
+
+
+def test_depth_plot_draws_the_other_tunnel_model_faint(dashboard):
+    """Issue 11: the depth plot shows the chosen model's profile and, dashed, the other one's,
+    each with its own numbers."""
+    assert dashboard.other_model is not None
+    assert dashboard.other_model.scenario.tunnel.model == "2.5d"
+    curves = _curves(_shown(dashboard, "depth_profile"))
+    for results in (dashboard.results, dashboard.other_model):
+        name = plots.MODEL_NAMES[results.scenario.tunnel.model]
+        np.testing.assert_allclose(
+            curves[name].dimension_values(0), results.soil.peak_disp_m * 1e3, rtol=1e-12
+        )
 
 
 def test_closing_a_session_drops_its_results(dashboard):
