@@ -28,6 +28,7 @@ from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
+from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
 from dashboard.whatif import CURRENT_LABEL, WhatIfSession, load_session
 from model.__main__ import add_scenario_arguments, load_scenario
 from model.pipeline import Results, SimulationError, StageCache, run
@@ -86,7 +87,9 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
         f"<h1>{REPORT_TITLE}</h1>"
         + report_header(scenario_name)
         + "<p>Train → track → tunnel → soil: peak dynamic displacement below a metro tunnel in "
-        "soft soil. Displacements are positive downward.</p>"
+        "soft soil, and its permanent settlement over years of traffic. Displacements are "
+        "positive downward. Tunnel–soil model: "
+        + f"<b>{plots.MODEL_NAMES[scenario.tunnel.model]}</b>.</p>"
         "<h3>Key numbers</h3>"
         + items_html(plots.summary_items(results), "summary")
         + "<h3>Derived soil quantities</h3>"
@@ -100,10 +103,13 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
             pn.pane.HoloViews(
                 spec.draw(results), sizing_mode="stretch_width", css_classes=[f"plot-{spec.key}"]
             )
-            for spec in plots.PLOTS
+            for spec in (*plots.PLOTS, *LONGTERM_PLOTS)
         ],
         ncols=2,
         sizing_mode="stretch_width",
+    )
+    longterm = pn.pane.Markdown(
+        "### Long-term settlement\n\n" + law_statement(results), sizing_mode="stretch_width"
     )
     scenario_block = pn.pane.HTML(
         "<h3>Scenario</h3><details open><summary>All inputs (JSON, SI units except "
@@ -111,7 +117,7 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
         "</pre></details>",
         sizing_mode="stretch_width",
     )
-    return pn.Column(header, figures, scenario_block, sizing_mode="stretch_width")
+    return pn.Column(header, figures, longterm, scenario_block, sizing_mode="stretch_width")
 
 
 def _packaged_stylesheet(sheet):
