@@ -1,4 +1,4 @@
-"""Time the long-term stage and the stresses of the soil stage on the paper case (MODEL.md §10).
+"""Time the long-term stage and the soil stage's stresses on the paper case (docs/model.md §10).
 
 Run: ``python benchmarks/bench_longterm.py``. Prints best-of-N wall times with warm Numba
 caches: the long-term stage alone (target ≤ 0.1 s), a pipeline re-run after a change of the

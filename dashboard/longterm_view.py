@@ -1,6 +1,6 @@
 """Long-term settlement view: pure plot functions Results → HoloViews, and a calibration panel.
 
-The plots read ``Results.longterm`` (MODEL.md §10): settlement at the invert against years of
+The plots read ``Results.longterm`` (docs/model.md §10): settlement at the invert against years of
 service (log axis), the permanent strain and the stress ratio q_d/σ_s against depth with the
 depth that holds 90 % of the settlement, and the fit of a cyclic-triaxial calibration. The
 :class:`CalibrationPanel` uploads a triaxial CSV (``model.longterm.parse_triaxial_csv``), shows

@@ -139,7 +139,7 @@ def main() -> None:
             "–",
             f"The Winkler (BOEF) curve of the same track gives {boef_peak * MM:.3f} mm "
             f"(ratio {model_peak / boef_peak:.2f}); the paper's Table 2 track values are "
-            "missing, ours are MODEL.md's assumptions.",
+            "missing, ours are docs/model.md's assumptions.",
         ),
         row(
             "Fig. 5: duration above 10 % of the peak, model vs BOEF",
@@ -148,7 +148,7 @@ def main() -> None:
             f"{model_width / boef_width:.3f}",
             f"Same sense as the paper, but small here: 10 m from the wheel the model's block "
             f"is still {model_far * 1e6:.2f} µm down, the BOEF's {boef_far * 1e6:.3f} µm. With "
-            "MODEL.md's stiff supports the two nearly coincide; the paper's larger gap may "
+            "docs/model.md's stiff supports the two nearly coincide; the paper's larger gap may "
             "come from its unknown track values or mode count.",
         ),
         row(
@@ -239,7 +239,7 @@ def main() -> None:
 
 
 def model_comparison(flat, moving, smooth) -> list[str]:
-    """Section: the paper's 2D section against the 2.5D moving-load model (MODEL.md §9)."""
+    """Section: the paper's 2D section against the 2.5D moving-load model (docs/model.md §9)."""
     scenario = moving.scenario
     tunnel, soil = scenario.tunnel, scenario.soil
     length, bending, spring = beam_on_soil_length(tunnel, soil)
@@ -251,7 +251,7 @@ def model_comparison(flat, moving, smooth) -> list[str]:
         for name, r in (("2d", flat), ("2.5d", moving))
     }
     lines = [
-        "## The 2D section against the 2.5D moving-load model (MODEL.md §9)",
+        "## The 2D section against the 2.5D moving-load model (docs/model.md §9)",
         "",
         "Same vehicle–track run (`Scenario.paper()` and `Scenario.paper_2p5d()` share it), same",
         "line load q = 2F_b/L_s; the 2D model applies it to the whole tunnel at once, the 2.5D",
@@ -339,7 +339,7 @@ the end of the train) and that quasi-static part falls off with depth only logar
 The paper does not say how it treated the zero-frequency bin, the record length or the
 harmonic count, and its soil equations carry only the P potential, which cannot satisfy both
 interface conditions; each of these changes the depth decay. We keep the consistent model of
-MODEL.md §7 and show, in the tests, that our peak converges in record length (zero padding)
+docs/model.md §7 and show, in the tests, that our peak converges in record length (zero padding)
 and harmonics, rather than tune it. A true 3D (2.5D) tunnel model would spread the load along
 the tunnel; the section above compares it with the 2D model.
 
@@ -350,9 +350,9 @@ The spectral peaks: with 22 m cars at 80 km/h the car-passing harmonics sit at m
 1.01 Hz, so the paper's "2, 3, 4 Hz" are the 2nd–4th of them. Which harmonics stand out is
 set by the axle pattern's envelope (zeros where a multiple of the wheelbase or bogie spacing
 equals a whole number of wavelengths), so it depends on the geometry the paper does not give
-for certain (MODEL.md assumes the Type A dimensions); we list what our geometry gives and do
+for certain (docs/model.md assumes the Type A dimensions); we list what our geometry gives and do
 not tune it. The paper's Table 2 (track) is missing; track
-values are MODEL.md's stated assumptions, which shifts every absolute force and displacement.
+values are docs/model.md's stated assumptions, which shifts every absolute force and displacement.
 """
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Vertical rail-profile irregularity (paper §2.4, MODEL.md §4).
+"""Vertical rail-profile irregularity (paper §2.4, docs/model.md §4).
 
 The US FRA vertical-profile PSD, its trigonometric-series synthesis and measured profiles read
 from CSV. Sign convention: vertical displacements are positive **downward** in this project and
@@ -17,7 +17,7 @@ import numpy as np
 
 from model.params import FRA_ROUGHNESS_CM2_RAD_PER_M, Irregularity
 
-FRA_SCALE_FACTOR = 0.25  # k of the FRA formula (MODEL.md §4)
+FRA_SCALE_FACTOR = 0.25  # k of the FRA formula (docs/model.md §4)
 FRA_CUTOFF_WAVENUMBER = 0.8245  # Ω_c (rad/m)
 CM2_TO_M2 = 1e-4
 

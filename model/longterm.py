@@ -1,4 +1,4 @@
-"""Long-term (permanent) settlement under the tunnel from the passages' stresses (MODEL.md §10).
+"""Permanent settlement under the tunnel from each passage's stresses (docs/model.md §10).
 
 The chain, per depth d below the ring–soil interface directly under the invert:
 

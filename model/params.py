@@ -106,7 +106,7 @@ class Vehicle(param.Parameterized):
     """Metro car: masses and suspensions of one whole car (paper Table 1).
 
     The one-rail model halves every mass and inertia; suspension values are per side. All are
-    used by ``model.vehicle_track._vehicle_system`` (and so by ``stable_time_step``). Hard
+    used by ``model.vehicle_track.assemble_vehicle`` (and so by ``stable_time_step``). Hard
     bounds span rail vehicles from a light tram to a loaded heavy-rail car; outside them the
     one-rail linear-suspension model and its explicit time step lose their meaning.
     """
@@ -116,7 +116,7 @@ class Vehicle(param.Parameterized):
         (5000.0, 120000.0),
         (20000.0, 60000.0),
         "Car body mass (kg)",
-        "Mass of one car body, M_c (paper Table 1), in model.vehicle_track._vehicle_system "
+        "Mass of one car body, M_c (paper Table 1), in model.vehicle_track.assemble_vehicle "
         "and Vehicle.static_wheel_load. Bounds 5–120 t: a light tram body to a fully loaded "
         "heavy-rail car body.",
     )
@@ -125,7 +125,7 @@ class Vehicle(param.Parameterized):
         (1e4, 1e8),
         (5e5, 3e6),
         "Car body pitch inertia (kg·m²)",
-        "Pitch inertia of one car body, J_c, in model.vehicle_track._vehicle_system. The paper "
+        "Pitch inertia of one car body, J_c, in model.vehicle_track.assemble_vehicle. The paper "
         "does not give it; None means M_c·L_car²/12 (uniform slender body, docs/model.md §1). "
         "Bounds 1e4–1e8 kg·m²: M_c L²/12 over the mass and length bounds.",
         allow_none=True,
@@ -135,7 +135,7 @@ class Vehicle(param.Parameterized):
         (500.0, 10000.0),
         (1500.0, 5000.0),
         "Bogie frame mass (kg)",
-        "Mass of one bogie frame, M_t (paper Table 1), in model.vehicle_track._vehicle_system. "
+        "Mass of one bogie frame, M_t (paper Table 1), in model.vehicle_track.assemble_vehicle. "
         "Bounds 0.5–10 t: tram to heavy freight bogie frames.",
     )
     bogie_pitch_inertia = _q(
@@ -144,7 +144,7 @@ class Vehicle(param.Parameterized):
         (1000.0, 8000.0),
         "Bogie pitch inertia (kg·m²)",
         "Pitch inertia of one bogie frame, J_t (paper Table 1), in "
-        "model.vehicle_track._vehicle_system. Bounds 100–5e4 kg·m²: M_t l² over the bogie "
+        "model.vehicle_track.assemble_vehicle. Bounds 100–5e4 kg·m²: M_t l² over the bogie "
         "masses and wheelbases.",
     )
     wheelset_mass = _q(
@@ -152,7 +152,7 @@ class Vehicle(param.Parameterized):
         (300.0, 5000.0),
         (800.0, 2500.0),
         "Wheelset mass (kg)",
-        "Mass of one wheelset, M_w (paper Table 1), in model.vehicle_track._vehicle_system "
+        "Mass of one wheelset, M_w (paper Table 1), in model.vehicle_track.assemble_vehicle "
         "and the Hertz term of stable_time_step. Bounds 0.3–5 t: light tram to powered "
         "heavy-haul wheelsets.",
     )
@@ -162,7 +162,7 @@ class Vehicle(param.Parameterized):
         (5e5, 5e6),
         "Primary suspension stiffness (N/m)",
         "Primary suspension stiffness per axle box, K_pz (paper Table 1), in "
-        "model.vehicle_track._vehicle_system. Bounds 0.1–100 MN/m: soft rubber springs to a "
+        "model.vehicle_track.assemble_vehicle. Bounds 0.1–100 MN/m: soft rubber springs to a "
         "nearly rigid axle box.",
     )
     primary_damping = _q(
@@ -171,7 +171,7 @@ class Vehicle(param.Parameterized):
         (0.0, 2e5),
         "Primary suspension damping (N·s/m)",
         "Primary suspension damping per axle box, C_pz (paper Table 1), in "
-        "model.vehicle_track._vehicle_system. Bounds 0–1 MN·s/m: undamped to ten times the "
+        "model.vehicle_track.assemble_vehicle. Bounds 0–1 MN·s/m: undamped to ten times the "
         "heaviest hydraulic dampers.",
     )
     secondary_stiffness = _q(
@@ -180,7 +180,7 @@ class Vehicle(param.Parameterized):
         (2e5, 5e6),
         "Secondary suspension stiffness (N/m)",
         "Secondary suspension stiffness per bogie side, K_sz (paper Table 1), in "
-        "model.vehicle_track._vehicle_system. Bounds 0.1–100 MN/m: air springs to stiff "
+        "model.vehicle_track.assemble_vehicle. Bounds 0.1–100 MN/m: air springs to stiff "
         "freight springs.",
     )
     secondary_damping = _q(
@@ -189,7 +189,7 @@ class Vehicle(param.Parameterized):
         (0.0, 5e5),
         "Secondary suspension damping (N·s/m)",
         "Secondary suspension damping per bogie side, C_sz (paper Table 1), in "
-        "model.vehicle_track._vehicle_system. Bounds 0–2 MN·s/m: undamped to ten times the "
+        "model.vehicle_track.assemble_vehicle. Bounds 0–2 MN·s/m: undamped to ten times the "
         "paper's value.",
     )
 
@@ -239,7 +239,7 @@ class Train(param.Parameterized):
         (8.0, 20.0),
         "Bogie-centre distance (m)",
         "Distance between the two bogie centres of a car, 2l_c (15.7 m for Type A), in "
-        "Train.axle_offsets and model.vehicle_track._vehicle_system. Bounds 2–50 m; with "
+        "Train.axle_offsets and model.vehicle_track.assemble_vehicle. Bounds 2–50 m; with "
         "Scenario.validate: 2l_c + wheelbase < L_car.",
     )
     wheelbase = _q(
@@ -248,7 +248,7 @@ class Train(param.Parameterized):
         (1.8, 3.0),
         "Bogie wheelbase (m)",
         "Axle spacing within a bogie, 2l_h (twice the paper's half wheelbase 1.2 m), in "
-        "Train.axle_offsets and model.vehicle_track._vehicle_system. Bounds 1–5 m: real "
+        "Train.axle_offsets and model.vehicle_track.assemble_vehicle. Bounds 1–5 m: real "
         "bogies have 1.6–3.5 m.",
     )
 
@@ -257,7 +257,7 @@ class Train(param.Parameterized):
         label="Single bogie only",
         doc="If true, simulate the paper's Fig. 1 model: half a car body on one bogie with two "
         "wheelsets, instead of the full train (Train.axle_offsets, "
-        "model.vehicle_track._vehicle_system).",
+        "model.vehicle_track.assemble_vehicle).",
     )
 
     @classmethod
@@ -298,7 +298,7 @@ class Track(param.Parameterized):
     """Elastic supporting-block ballastless track, one rail.
 
     The paper's Table 2 is missing; defaults are typical Chinese-metro values (docs/model.md §2):
-    60 kg/m rail, 0.6 m block spacing. Used by ``model.vehicle_track._track_system`` and
+    60 kg/m rail, 0.6 m block spacing. Used by ``model.vehicle_track.assemble_track`` and
     ``stable_time_step``; the Winkler values by ``winkler_block_displacement``.
     """
 
@@ -308,7 +308,7 @@ class Track(param.Parameterized):
         (1.9e11, 2.2e11),
         "Rail Young's modulus (Pa)",
         "Young's modulus of rail steel, E (assumed, docs/model.md §2), in the modal rail of "
-        "model.vehicle_track._track_system (EI). Bounds 150–250 GPa: rail steels.",
+        "model.vehicle_track.assemble_track (EI). Bounds 150–250 GPa: rail steels.",
     )
     rail_I = _q(
         3.217e-5,
@@ -316,7 +316,7 @@ class Track(param.Parameterized):
         (1e-5, 6e-5),
         "Rail second moment of area (m⁴)",
         "Vertical-bending second moment of area of the rail, I (60 kg/m rail, assumed), in "
-        "model.vehicle_track._track_system (EI). Bounds 5e-6–1e-4 m⁴: light 30 kg/m rails to "
+        "model.vehicle_track.assemble_track (EI). Bounds 5e-6–1e-4 m⁴: light 30 kg/m rails to "
         "beyond the 75 kg/m rail.",
     )
     rail_mass = _q(
@@ -324,7 +324,7 @@ class Track(param.Parameterized):
         (20.0, 120.0),
         (40.0, 80.0),
         "Rail mass per length (kg/m)",
-        "Mass per metre of the rail, m_r (assumed), in model.vehicle_track._track_system. "
+        "Mass per metre of the rail, m_r (assumed), in model.vehicle_track.assemble_track. "
         "Bounds 20–120 kg/m: light rails to heavy rails with fittings.",
     )
     block_spacing = _q(
@@ -333,7 +333,7 @@ class Track(param.Parameterized):
         (0.5, 0.75),
         "Block spacing (m)",
         "Distance between supporting blocks, L_s (assumed), in "
-        "model.vehicle_track._track_system, Scenario.rail_length and the line load "
+        "model.vehicle_track.assemble_track, Scenario.rail_length and the line load "
         "model.pipeline.invert_line_load. Bounds 0.3–1.5 m: the discretely supported rail "
         "needs several supports per wheel-load spread; real spacings are 0.5–0.75 m.",
     )
@@ -343,7 +343,7 @@ class Track(param.Parameterized):
         (1e7, 2e8),
         "Fastener stiffness (N/m)",
         "Rail pad / fastener stiffness per block, K_r (assumed), in "
-        "model.vehicle_track._track_system. Bounds 1 MN/m–10 GN/m: the softest resilient "
+        "model.vehicle_track.assemble_track. Bounds 1 MN/m–10 GN/m: the softest resilient "
         "fasteners to a practically rigid pad.",
     )
     fastener_damping = _q(
@@ -352,7 +352,7 @@ class Track(param.Parameterized):
         (0.0, 2e5),
         "Fastener damping (N·s/m)",
         "Rail pad / fastener damping per block, C_r (assumed), in "
-        "model.vehicle_track._track_system. Bounds 0–1 MN·s/m: undamped to five times the "
+        "model.vehicle_track.assemble_track. Bounds 0–1 MN·s/m: undamped to five times the "
         "stiffest published pads.",
     )
     pad_stiffness = _q(
@@ -361,7 +361,7 @@ class Track(param.Parameterized):
         (5e6, 1.5e8),
         "Block pad stiffness (N/m)",
         "Block pad + rubber boot stiffness per block, K_s (assumed), in "
-        "model.vehicle_track._track_system; the invert force K_s Z_s + C_s Ż_s. Bounds "
+        "model.vehicle_track.assemble_track; the invert force K_s Z_s + C_s Ż_s. Bounds "
         "1 MN/m–10 GN/m: soft boots to a practically rigid support.",
     )
     pad_damping = _q(
@@ -370,7 +370,7 @@ class Track(param.Parameterized):
         (0.0, 3e5),
         "Block pad damping (N·s/m)",
         "Block pad + rubber boot damping per block, C_s (assumed), in "
-        "model.vehicle_track._track_system and the invert force. Bounds 0–1 MN·s/m: undamped to "
+        "model.vehicle_track.assemble_track and the invert force. Bounds 0–1 MN·s/m: undamped to "
         "five times the most damped published boots.",
     )
     block_mass = _q(
@@ -379,7 +379,7 @@ class Track(param.Parameterized):
         (50.0, 300.0),
         "Block mass (kg)",
         "Mass of one supporting block on one rail, M_s (assumed), in "
-        "model.vehicle_track._track_system. Bounds 10–1000 kg: a base plate to a floating "
+        "model.vehicle_track.assemble_track. Bounds 10–1000 kg: a base plate to a floating "
         "slab segment per rail seat.",
     )
     wheel_radius = _q(
@@ -706,7 +706,7 @@ class Numerics(param.Parameterized):
         softbounds=(50, 2000),
         allow_None=True,
         label="Rail modes",
-        doc="Modes N_m of the simply supported rail, in model.vehicle_track._track_system; "
+        doc="Modes N_m of the simply supported rail, in model.vehicle_track.assemble_track; "
         "None means L/L_s (shortest modal half-wavelength = block spacing, docs/model.md §2). "
         "Bounds 1–20000; Scenario.validate requires N_m ≥ L/(2L_s).",
     )

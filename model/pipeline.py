@@ -6,7 +6,7 @@ settlement.
 depends on, so moving a soil slider reuses the vehicle–track simulation and moving the speed
 slider re-runs everything.
 
-Coupling rule (MODEL.md §6): the 3D train loads the 2D tunnel section through the force into
+Coupling rule (docs/model.md §6): the 3D train loads the 2D tunnel section through the force into
 the invert under the monitored block, spread over one block spacing and summed over both rails,
 ``q(t) = N_RAILS · F_b(t) / L_s`` in N per metre of tunnel.
 """
@@ -39,7 +39,7 @@ from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail
 from model.spectra import one_sided_psd
 from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
-N_RAILS = 2  # both rails load the same tunnel section (MODEL.md §6)
+N_RAILS = 2  # both rails load the same tunnel section (docs/model.md §6)
 # invariant_warnings: growth of the peak with depth tolerated, relative to the invert peak (the
 # FFT's rounding and the tail's truncation leave ripples orders of magnitude below this).
 INVARIANT_TOLERANCE = 1e-6

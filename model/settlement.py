@@ -1,8 +1,8 @@
-"""Displacement time histories below the tunnel and their peaks against depth (MODEL.md §8).
+"""Displacement time histories below the tunnel and their peaks against depth (docs/model.md §8).
 
 The line load q(t) on the invert is Fourier transformed, multiplied by the invert receptance
 H(f, d) of ``model.tunnel_soil`` and transformed back, at every output depth d. With the 2.5D
-model (``tunnel.model == "2.5d"``, MODEL.md §9) the receptance is that of
+model (``tunnel.model == "2.5d"``, docs/model.md §9) the receptance is that of
 ``model.tunnel_soil_3d`` at the wavenumber ξ = ω/v of the train moving at speed v: the invert
 load is stationary in the moving frame, so U(ω, d) = H(ω, ω/v, d) Q(ω).
 
@@ -51,7 +51,7 @@ SAMPLES_PER_MAX_FREQUENCY_PERIOD = 4
 # depth: the response at depth d lags the load by about d/c₂, twice that covers its peak.
 TAIL_TRANSIT_TIMES = 2.0
 # Depth below the invert at which the paper quotes its Fig. 11 value (2.94 mm); the summary
-# always reports the peak displacement there (MODEL.md §8).
+# always reports the peak displacement there (docs/model.md §8).
 COMPARISON_DEPTH_M = 11.0
 
 
@@ -124,7 +124,7 @@ def section_receptance(
     """Invert receptance of the chosen tunnel model (m per N/m), complex (n_freq, n_depth).
 
     ``tunnel.model == "2d"``: ``invert_receptance``; ``"2.5d"``: ``receptance_2p5d`` at the
-    wavenumber ξ = 2πf/v of a load moving at ``speed_m_s`` = v (MODEL.md §9).
+    wavenumber ξ = 2πf/v of a load moving at ``speed_m_s`` = v (docs/model.md §9).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Tunnel lining ring in an elastic full-space, per circumferential harmonic (MODEL.md §7).
+"""Tunnel lining ring in an elastic full-space, per circumferential harmonic (docs/model.md §7).
 
 Plane strain, polar coordinates (r, θ) about the tunnel axis, θ = 0 at the invert pointing
 **down**, time convention exp(+iωt). Everything is in the outward notation: w = u_r(a) radial

@@ -1,4 +1,4 @@
-"""Cylindrical-shell tunnel in an elastic full-space, 2.5D moving-load model (MODEL.md §9).
+"""Cylindrical-shell tunnel in an elastic full-space, 2.5D moving-load model (docs/model.md §9).
 
 Cylindrical coordinates (r, θ, x): x along the tunnel, θ = 0 at the invert pointing **down**,
 (r, θ, x) right-handed as (r, θ, z) of ``model.tunnel_soil``; every field varies as
@@ -10,7 +10,7 @@ coefficient below is a real expression of ξ, n, α, β (complex only through th
 Lining: thin cylindrical shell after **Flügge** (Leissa 1973, eqs 2.2–2.3), radius a (middle
 surface), K = Eh/(1−ν²), k = h²/(12a²), ζ = ξa, mass m = ρh per unit area. Flügge rather than
 Donnell because at ξ = 0 Flügge's equations are exactly the plane-strain ring of the 2D model
-(bending (n² − 1)², free rigid translation for n = 1, MODEL.md §7), which Donnell's are not
+(bending (n² − 1)², free rigid translation for n = 1, docs/model.md §7), which Donnell's are not
 (bending n⁴: it stiffens the n = 1 translation and the n = 2 ovalling that carry most of the
 invert load). Force per unit area = −S (Ũ, V, W) with the symmetric S = (K/a²) s,
     s11 = ζ² + (1−ν)(1+k) n²/2,      s12 = (1+ν) ζ n/2,      s13 = ζ (ν + kζ² − k(1−ν) n²/2),
@@ -460,7 +460,7 @@ def receptance_2p5d(
 ) -> np.ndarray:
     """Downward displacement under the invert per unit downward line load exp(i(ωt − ξx)).
 
-    H(ω, ξ, d) of MODEL.md §9: the point is r = a + d, θ = 0, x = 0; the load a line load
+    H(ω, ξ, d) of docs/model.md §9: the point is r = a + d, θ = 0, x = 0; the load a line load
     (N/m) at the invert varying as exp(i(ωt − ξx)); harmonics n = 0..N summed. H is even in ξ
     and H(ω, 0, d) is ``model.tunnel_soil.invert_receptance``.
 
@@ -627,7 +627,7 @@ def point_load_response(
     """Displacement below the invert per unit downward point force on the invert (m/N).
 
     G(ω, x, d) = (1/2π)∫ H(ω, ξ, d) e^{−iξx} dξ = (1/π)∫₀^∞ H(ω, ξ, d) cos ξx dξ (H is even),
-    MODEL.md §9: the force acts at the invert at x = 0, the displacement is taken at depth d
+    docs/model.md §9: the force acts at the invert at x = 0, the displacement is taken at depth d
     below the invert at distance x along the tunnel. The integral is Filon's rule (H linear
     between nodes, the cosine integrated exactly, so x needs no extra nodes) on nodes uniform
     in asinh(ξ/ξ_c) from 0 to ``numerics.max_wavenumber`` (ξ_c = min(0.1 Re k₂,

@@ -1,4 +1,4 @@
-"""Nonlinear vehicle–track model: the excitation model of the paper (§2, §4.1; MODEL.md §1–6).
+"""Nonlinear vehicle–track model: the excitation model of the paper (§2, §4.1; docs/model.md §1–6).
 
 Vehicle (one-rail half model): the paper's single bogie (half car body in bounce, bogie bounce
 and pitch, two wheelsets) or a train of independent 10-DOF cars. Track: simply supported modal
@@ -272,7 +272,7 @@ def assemble_track(scenario: Scenario) -> TrackSystem:
     Parameters
     ----------
     scenario : Scenario
-        Uses ``track`` (rail and support values, MODEL.md §2), ``rail_length`` and
+        Uses ``track`` (rail and support values, docs/model.md §2), ``rail_length`` and
         ``rail_modes``.
 
     Returns
@@ -319,7 +319,7 @@ def assemble_track(scenario: Scenario) -> TrackSystem:
 def assemble_vehicle(scenario: Scenario) -> VehicleSystem:
     """Per-car mass, stiffness, damping and gravity of the one-rail vehicle model.
 
-    Every mass and inertia is halved (one rail), suspensions are per side (MODEL.md §1).
+    Every mass and inertia is halved (one rail), suspensions are per side (docs/model.md §1).
     The single bogie carries a quarter of the car body in bounce only; a full car has body
     bounce and pitch, two bogies in bounce and pitch and four wheelsets. Longitudinal positions
     grow backwards along the train, so the wheel order follows ``Train.axle_offsets``.

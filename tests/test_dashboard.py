@@ -127,7 +127,7 @@ def test_depth_plot_overlays_both_paper_series_separately(results):
     np.testing.assert_allclose(model.dimension_values(0), results.soil.peak_disp_m * MM)
     np.testing.assert_allclose(model.dimension_values(1), results.soil.depth_m)
     fig11 = layers["Paper Fig. 11"]
-    np.testing.assert_allclose(fig11.dimension_values(0), [6.72, 2.94])  # MODEL.md §8, mm
+    np.testing.assert_allclose(fig11.dimension_values(0), [6.72, 2.94])  # docs/model.md §8, mm
     np.testing.assert_allclose(fig11.dimension_values(1), [0.0, 11.0])
     conclusions = layers["Paper conclusions"]
     np.testing.assert_allclose(conclusions.dimension_values(0), [7.27, 0.91])
@@ -346,7 +346,7 @@ def test_optional_parameter_text_box_accepts_automatic(dashboard):
 def test_train_type_selector_applies_the_standard_geometry(dashboard):
     assert dashboard.train_type.value == "Type A"
     dashboard.train_type.value = "Type B"
-    assert dashboard.scenario.train.car_length == 19.0  # Train.type_b, MODEL.md §1
+    assert dashboard.scenario.train.car_length == 19.0  # Train.type_b, docs/model.md §1
     assert dashboard.controls["train.car_length"].text.value == "19"
     dashboard.controls["train.car_length"].enter("20")
     assert dashboard.train_type.value == scenarios.CUSTOM

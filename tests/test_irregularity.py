@@ -1,4 +1,4 @@
-"""Track irregularity: FRA PSD, trigonometric-series synthesis, measured profiles (MODEL.md §4)."""
+"""Track irregularity: FRA PSD, trigonometric series, measured profiles (docs/model.md §4)."""
 
 from __future__ import annotations
 
@@ -91,7 +91,7 @@ def test_band_integral_closed_form_matches_quad_and_model_md_rms():
     """Closed-form band integral = scipy quad; class 6 over 1–50 m gives RMS 2.30 mm.
 
     quad tolerance 1e-9 relative (smooth integrand, quad's own error estimate is ~1e-14).
-    MODEL.md quotes the RMS as ≈ 2.3 mm (2 significant figures): 0.05 mm tolerance.
+    docs/model.md quotes the RMS as ≈ 2.3 mm (2 significant figures): 0.05 mm tolerance.
     """
     for track_class, amplitude in [(1, 1.2107), (6, 0.0339)]:
         lo, hi = 2 * math.pi / 50.0, 2 * math.pi / 1.0
@@ -131,7 +131,7 @@ def test_profile_variance_over_one_period_equals_series_variance(seed):
 
     Cross terms at difference frequencies (multiples of ΔΩ) vanish exactly on a uniform grid
     over one period; sum-frequency terms average to O(1/(Ω_min·period)) ≈ 0.4 % at most
-    (observed ≤ 0.35 %), so 1 % tolerance. Class 6 RMS over 1–50 m is then 2.3 mm (MODEL.md).
+    (observed ≤ 0.35 %), so 1 % tolerance. Class 6 RMS over 1–50 m is then 2.3 mm (docs/model.md).
     """
     n_components = 2000
     x = one_period_grid(n_components, 2**16)

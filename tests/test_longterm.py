@@ -1,4 +1,4 @@
-"""Long-term settlement (MODEL.md §10): deviator, stress transfer, laws, settlement, calibration.
+"""Long-term settlement (docs/model.md §10): deviator, stresses, laws, settlement, calibration.
 
 Closed forms first (the deviator of known tensors, the static cavity), exact scaling properties
 of the chain next, then the pipeline stages, the calibration and bad input.

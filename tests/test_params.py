@@ -181,7 +181,7 @@ def test_dotted_set_parses_and_refuses():
 
 
 def test_static_wheel_load_from_table_1():
-    """(38 500 + 2·2 980 + 4·1 350) kg · 9.81 / 8 wheels = 61.14 kN (MODEL.md: 61.1 kN)."""
+    """(38 500 + 2·2 980 + 4·1 350) kg · 9.81 / 8 wheels = 61.14 kN (docs/model.md: 61.1 kN)."""
     assert Vehicle().static_wheel_load == pytest.approx(49860 * 9.81 / 8, rel=1e-12)
     assert Vehicle().static_wheel_load == pytest.approx(61.1e3, rel=1e-3)
 
@@ -210,7 +210,7 @@ def test_soil_constructors_invert_each_other():
 
 
 def test_track_derived_check_values_from_the_model_sheet():
-    """MODEL.md §2–3: β = 1.14 1/m, 0.78 mm under 61.1 kN, Hertz compression ≈ 81 µm."""
+    """docs/model.md §2–3: β = 1.14 1/m, 0.78 mm under 61.1 kN, Hertz compression ≈ 81 µm."""
     track = Track()
     k = 8e7 * 4e7 / (1.2e8 * 0.6)
     assert track.winkler_modulus == pytest.approx(k, rel=1e-14)

@@ -38,7 +38,7 @@ def test_result_fields_have_the_documented_shapes(results):
 
 
 def test_line_load_is_the_coupling_rule_of_the_model_sheet(results):
-    """q = 2 F_b / L_s exactly (MODEL.md §6)."""
+    """q = 2 F_b / L_s exactly (docs/model.md §6)."""
     np.testing.assert_allclose(
         results.load.line_load_N_per_m, 2 * results.vehicle_track.block_force_N / 0.6, rtol=1e-15
     )

@@ -485,9 +485,9 @@ def test_speed_at_or_above_the_shear_wave_speed_is_computed_with_a_warning():
 def test_moving_frame_equals_the_direct_sum_over_block_forces(cheap_scenario):
     """Smooth rail: the block forces are F_j(t) = F_b(t − x_j/v) (stationary in the moving
     frame), so Σ_j G(ω, x_j, d) · 2F̂_j(ω) (point forces of both rails at blocks x_j = j L_s)
-    must equal H(ω, ω/v, d) Q(ω), Q = 2F̂_b/L_s (MODEL.md §9). Compared on 16 frequencies
+    must equal H(ω, ω/v, d) Q(ω), Q = 2F̂_b/L_s (docs/model.md §9). Compared on 16 frequencies
     0.6–30 Hz of the vehicle–track run's spectrum, as the load-weighted relative L2 difference
-    at the invert and 11 m: < 1 % (MODEL.md). Blocks within 400 m: the truncation is the
+    at the invert and 11 m: < 1 % (docs/model.md). Blocks within 400 m: the truncation is the
     largest part (0.06 % at the invert, 0.4 % at 11 m, half of it with blocks to 600 m);
     the Poisson-sum aliasing |H(ω/v + 2π/L_s)|/|H(ω/v)| ~ 3e-5 and the wavenumber integral
     (≤ 1e-3 of max |G|) are below."""

@@ -1,4 +1,4 @@
-"""Vehicle–track model (MODEL.md §1–6): closed forms first, then convergence, then the paper's
+"""Vehicle–track model (docs/model.md §1–6): closed forms first, then convergence, then the paper's
 qualitative claims. Most runs use the single bogie (64.8 m rail, 108 modes, ~10 k steps, a few
 ms each once compiled); the six-car train is run once per module.
 """
@@ -87,7 +87,7 @@ def dense_static_track(scenario: Scenario, wheel_x: np.ndarray, loads: np.ndarra
     """Static rail modal coordinates and block displacements by one dense solve (no transform).
 
     Unknowns [q (N_m), Z_s (N−1)]: (diag ω² + K_r Φ Φᵀ) q − K_r Φ Z_s = Φ_w p,
-    −K_r Φᵀ q + (K_r + K_s) Z_s = 0, with Φ_ki = Y_k(x_i) written out from MODEL.md §2.
+    −K_r Φᵀ q + (K_r + K_s) Z_s = 0, with Φ_ki = Y_k(x_i) written out from docs/model.md §2.
     """
     tr = scenario.track
     length = scenario.rail_length
@@ -128,7 +128,7 @@ def test_static_track_solution_equals_dense_solve(modes_per_spacing):
 @pytest.mark.parametrize("modes_per_spacing", [1.0, 2.05])
 def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
     """One evaluation of the kernel's accelerations for a random track state and prescribed
-    wheel loads, against MODEL.md §2 written with dense matrices in physical block coordinates
+    wheel loads, against docs/model.md §2 written with dense matrices in physical block coordinates
     (Φ_ki = Y_k(x_i) by NumPy sines, Z_s = D s with D the orthonormal DST-I). Both exact:
     tolerance 1e-10 of the largest term."""
     scenario = smooth_single_bogie()
@@ -194,7 +194,7 @@ def test_hertz_law():
 
 
 def test_static_start_is_equilibrium_with_hertz_compression():
-    """At t = 0 each wheel sits G p^{2/3} (≈ 81 µm, MODEL.md §3) into the rail and the vehicle
+    """At t = 0 each wheel sits G p^{2/3} (≈ 81 µm, docs/model.md §3) into the rail and the vehicle
     is at rest: its accelerations are below 1e-6 g (the kernel's Chebyshev mode shapes agree
     with NumPy's sines to ~1e-13, i.e. force errors of ~1e-4 N)."""
     scenario = smooth_single_bogie()
@@ -222,7 +222,7 @@ def test_quasi_static_passage_matches_static_load_and_winkler_beam():
       continuous support ±0.3 % (static solve with 4N modes: −0.2 % over a block, +0.3 %
       between blocks, βL_s = 0.68), mode truncation at N_m = N −0.6 %, dynamics < 0.3 %.
     - The block follows the Winkler block displacement (K_r/(K_r + K_s) of the rail) likewise.
-    - Check values of MODEL.md §2: β = 1.14 1/m, 0.78 mm under one 61.1 kN wheel.
+    - Check values of docs/model.md §2: β = 1.14 1/m, 0.78 mm under one 61.1 kN wheel.
     """
     scenario = smooth_single_bogie(speed_kmh=20.0)
     result = simulate(scenario)
@@ -336,7 +336,7 @@ def test_more_rail_modes_change_the_peak_invert_force_below_1_percent(convergenc
 
 
 def test_paper_mode_rule_underestimates_the_peak_invert_force(convergence_runs):
-    """MODEL.md §2: the paper's N_m = 0.5 L/L_s is about 7 % low (measured 7.7 %); asserted
+    """docs/model.md §2: the paper's N_m = 0.5 L/L_s is about 7 % low (measured 7.7 %); asserted
     between 4 and 12 %, which N_m = L/L_s (0.7 %) is not."""
     shortfall = 1.0 - convergence_runs[0.5, 1e-4] / convergence_runs[2.0, 2.5e-5]
     assert 0.04 < shortfall < 0.12
@@ -526,7 +526,7 @@ def test_runs_at_the_estimated_limit_stay_stable_across_the_parameter_ranges():
 
 def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
     """Function Δt → spectral radius of the Zhai amplification matrix of the linearised model
-    (dense, written out from the equations of MODEL.md §1–3; state x_n, v_n, a_{n−1})."""
+    (dense, written out from the equations of docs/model.md §1–3; state x_n, v_n, a_{n−1})."""
     track, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
     n_modes, n_blocks = track.omega2.size, track.n_spacings - 1
     n_dof = vehicle.inv_mass.shape[1]
@@ -587,7 +587,7 @@ def test_check_inputs_refuses_too_few_modes():
 
 
 def test_rail_too_short_is_refused_where_it_enters():
-    """A rail end margin under MODEL.md's 20 m is refused by the parameter's bounds, and the
+    """A rail end margin under docs/model.md's 20 m is refused by the parameter's bounds, and the
     derived rail always honours the margin."""
     scenario = smooth_single_bogie()
     with pytest.raises(
