@@ -76,10 +76,13 @@ WARM_UP_PRESET = "single_bogie"
 
 
 def _warm_up_run() -> None:
-    """One cheap run: compiles (or loads from Numba's cache) every kernel of the pipeline."""
+    """One cheap run per tunnel–soil model: compiles (or loads from Numba's cache) every
+    kernel of the pipeline."""
     scenario = Scenario.preset(WARM_UP_PRESET)
     scenario.numerics.n_depths = 11
-    run(scenario, cache=None)
+    for model in OTHER_MODEL:
+        scenario.tunnel.model = model
+        run(scenario, cache=None)
 
 
 def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
