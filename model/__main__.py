@@ -26,6 +26,7 @@ import numpy as np
 from model.params import Scenario
 from model.pipeline import STAGES, Results, SimulationError, run
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
+from model.settlement import COMPARISON_DEPTH_M
 
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 
@@ -224,9 +225,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"warning: {warning}", file=sys.stderr)
         summary = results.summary()
         print(
+            f"{scenario.tunnel.model} tunnel–soil model: "
             f"peak invert force {summary['peak_invert_force_N'] / 1e3:.1f} kN, "
             f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
-            f"at 11 m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; long-term settlement after "
+            f"at {COMPARISON_DEPTH_M:g} m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
+            "long-term settlement after "
             f"{scenario.longterm.years:g} years {summary['longterm_settlement_m'] * 1e3:.2f} mm; "
             f"{len(paths)} files in {args.out}"
         )
