@@ -28,7 +28,7 @@ from dashboard import plots
 from dashboard.controls import ParameterControl
 from dashboard.export import ITEMS_CSS, items_html, report_html
 from dashboard.longterm_view import LONGTERM_PLOTS, CalibrationPanel, law_statement
-from dashboard.scheduler import EXECUTOR, LatestRun, warm_up
+from dashboard.scheduler import EXECUTOR, LatestRun, warm_up, warm_up_run
 from dashboard.study_view import StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
@@ -71,18 +71,6 @@ PREPARING = (
     '<span class="preparing">Preparing the model: the numerical kernels are being compiled '
     "(first start of the server only; about a minute)…</span>"
 )
-
-WARM_UP_PRESET = "single_bogie"
-
-
-def _warm_up_run() -> None:
-    """One cheap run per tunnel–soil model: compiles (or loads from Numba's cache) every
-    kernel of the pipeline."""
-    scenario = Scenario.preset(WARM_UP_PRESET)
-    scenario.numerics.n_depths = 11
-    for model in OTHER_MODEL:
-        scenario.tunnel.model = model
-        run(scenario, cache=None)
 
 
 def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
@@ -163,6 +151,8 @@ class Dashboard(pn.viewable.Viewer):
     ):
         super().__init__(**params)
         self.scenario = scenario if scenario is not None else Scenario.preset(preset)
+        self.base_preset = preset
+        """The preset the inputs started from (what-if names say what differs from it)."""
         self.cache = cache if cache is not None else StageCache()
         self.warm = warm
         self.results: Results | None = None
@@ -259,7 +249,7 @@ class Dashboard(pn.viewable.Viewer):
             current=lambda: (self.scenario, self.results),
             restore=self._replace_scenario,
             compute=lambda scenario: run(scenario, cache=self.cache),
-            preset=lambda: self.preset_select.value,
+            preset=lambda: self.base_preset,
         )
         self.whatif.param.watch(self._redraw_overlays, "overlays_changed")
         self.law_statement = pn.pane.Markdown("", sizing_mode="stretch_width")
@@ -438,6 +428,7 @@ class Dashboard(pn.viewable.Viewer):
         if self._quiet or event.new == scenarios.CUSTOM:
             return
         self.preset_note.object = _note_html(self._preset_descriptions.get(event.new, ""))
+        self.base_preset = event.new
         self._replace_scenario(Scenario.preset(event.new))
 
     def _on_train_type(self, event: param.parameterized.Event) -> None:
@@ -655,7 +646,7 @@ def serve_session() -> Dashboard:
     cache and warm-up; the session's memory is dropped when it closes)."""
     cache = pn.state.as_cached("tunnelsettle-stage-cache", StageCache)
     dashboard = Dashboard.from_query(
-        pn.state.session_args, cache=cache, warm=warm_up(_warm_up_run), threaded=True
+        pn.state.session_args, cache=cache, warm=warm_up(warm_up_run), threaded=True
     )
     pn.state.onload(dashboard.refresh)
     pn.state.on_session_destroyed(lambda _context: dashboard.close())

@@ -18,6 +18,9 @@ from collections.abc import Callable
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from typing import Generic, TypeVar
 
+from model.params import Scenario
+from model.pipeline import run
+
 Job = TypeVar("Job")
 Outcome = TypeVar("Outcome")
 
@@ -35,6 +38,24 @@ def warm_up(task: Callable[[], object], executor: Executor = EXECUTOR) -> Future
         if _warm_up_future is None:
             _warm_up_future = executor.submit(task)
         return _warm_up_future
+
+
+WARM_UP_PRESET = "single_bogie"
+
+
+def warm_up_run() -> None:
+    """One cheap run per tunnel–soil model: compiles (or loads from Numba's cache) every
+    kernel of the pipeline.
+
+    It lives here, in an imported module, not in the served app script: ``panel serve --warm``
+    runs the script once in a session that is then destroyed, which clears that script's
+    globals while this task may still be running.
+    """
+    scenario = Scenario.preset(WARM_UP_PRESET)
+    scenario.numerics.n_depths = 11
+    for model in ("2d", "2.5d"):
+        scenario.tunnel.model = model
+        run(scenario, cache=None)
 
 
 class LatestRun(Generic[Job, Outcome]):

@@ -557,3 +557,14 @@ def test_export_command_line_refuses_bad_input(tmp_path, capsys):
     assert stop.value.code == 2
     assert "youngs_modulus" in capsys.readouterr().err
     assert not (tmp_path / "r.html").exists()
+
+
+def test_pinning_works_once_the_inputs_are_custom(dashboard):
+    """The preset label reads 'custom' after an edit; a pin still names what differs from the
+    preset the inputs started from (a browser session showed a KeyError for 'custom')."""
+    dashboard.scenario.soil.youngs_modulus = 8e6
+    dashboard.refresh()
+    assert dashboard.preset_select.value == scenarios.CUSTOM
+    dashboard.whatif.pin_button.clicks += 1
+    assert len(dashboard.whatif.session.runs) == 1
+    assert "8 MPa" in dashboard.whatif.session.runs[0].name
