@@ -2,7 +2,8 @@
 
 Prints the Markdown tables of docs/fe_section.md: elastic FE (model.fe_section.run_fe) and the
 analytical model (model.settlement through model.fe_section.analytical_profile) under the same
-load, a Hann pulse at the invert (50 kN/m peak, 0.4 s long: band 0.25–3.75 Hz, λ_min = 9.5 m),
+load, a Hann pulse at the invert (50 kN/m peak, 0.4 s long in a 1 s record: band 1–4 Hz,
+λ_min = c₂/4 Hz = 8.95 m),
 without and with the soil's hysteretic damping. Run: ``python docs/fe_study.py`` (~15 min).
 """
 
@@ -17,7 +18,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from model.fe_section import FEMesh, analytical_profile, run_fe  # noqa: E402
+from model.fe_section import FEMesh, analytical_profile, load_band, run_fe  # noqa: E402
 from model.params import Scenario  # noqa: E402
 
 DT_S, PULSE_S, PEAK_N_PER_M = 1e-3, 0.4, 50e3
@@ -43,6 +44,7 @@ def errors(scenario: Scenario, mesh: FEMesh) -> tuple[float, float, int, float]:
 
 def main() -> None:
     """Print the refinement and boundary tables."""
+    wavelength = load_band(pulse(), DT_S, Scenario.paper().soil.s_wave_speed).shortest_wavelength_m
     for loss in (0.0, 0.06):
         scenario = Scenario.paper()
         scenario.soil.shear_loss_factor = loss
@@ -52,7 +54,7 @@ def main() -> None:
         for factor in (1, 1.5, 2):
             mesh = FEMesh(
                 outer_radius=20.0,
-                element_size=9.548 / 6 / factor,
+                element_size=wavelength / 6 / factor,
                 steps_per_period=round(20 * factor),
             )
             e0, emax, n, s = errors(scenario, mesh)
@@ -60,7 +62,10 @@ def main() -> None:
                 f"| {mesh.element_size:.2f} | {mesh.steps_per_period} | {n} | {e0:+.2%} | "
                 f"{emax:.2%} | {s:.0f} |"
             )
-        print(f"\nη_G = {loss}: boundary radius (h = λ_min/6 = 1.59 m, 20 steps/period)\n")
+        print(
+            f"\nη_G = {loss}: boundary radius "
+            f"(h = λ_min/6 = {wavelength / 6:.2f} m, 20 steps/period)\n"
+        )
         print("| R (m) | elements | invert error | max error 0–12 m | time (s) |")
         print("|---|---|---|---|---|")
         for radius in (15.0, 20.0, 30.0, 40.0):

@@ -230,11 +230,11 @@ def load_band(line_load_N_per_m, dt_s: float, s_wave_speed: float) -> LoadBand:
     LoadBand
     """
     q = np.asarray(line_load_N_per_m, dtype=float)
-    n_pad = 4 * q.size  # finer frequency grid for short pulses
-    energy = np.abs(np.fft.rfft(q - q.mean(), n_pad)) ** 2
+    # no zero padding: after removing the mean it would add a step at the record's end
+    energy = np.abs(np.fft.rfft(q - q.mean())) ** 2
     if q.size < 4 or not np.any(energy > 0):
         raise ValueError("the load history must have at least 4 samples and vary in time")
-    f_hz = np.fft.rfftfreq(n_pad, dt_s)
+    f_hz = np.fft.rfftfreq(q.size, dt_s)
     cumulative = np.cumsum(energy) / energy.sum()
     f_low = float(f_hz[np.searchsorted(cumulative, BAND_ENERGY_LOW)])
     f_high = float(f_hz[np.searchsorted(cumulative, BAND_ENERGY_HIGH)])
