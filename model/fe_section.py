@@ -87,7 +87,10 @@ TAIL_BOUNDARY_TIMES = 1.0
 """Quiet tail after each passage, in units of R/c₂ plus the boundary relaxation time."""
 SOIL_LAWS = ("elastic", "mohr_coulomb")
 PENALTY = 1e14
-"""Penalty factor of the constraints (N/m): 1e4 × the lining's EA, exact to ~1e-4 relative."""
+"""Penalty factor of the lining's equalDOF ties (N/m): 100 × LINK_STIFFNESS."""
+LINK_STIFFNESS = 1e12
+"""Soil–lining link stiffness (N/m per metre): 1e6 × the soil's G, 30 × the lining's EA/length,
+so the links stretch by ~1e-8 m under the train load (mm response)."""
 FE_EXTRA_MESSAGE = (
     "the FE section needs OpenSeesPy: install the 'fe' extra (pip install \".[fe]\") and, on "
     "Debian/Ubuntu, its BLAS/LAPACK libraries (apt-get install libopenblas0 liblapack3)"
@@ -513,20 +516,19 @@ def _build(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, plastic_ra
 def _add_lining(ops, scenario: Scenario, mesh: SectionMesh) -> None:
     """Lining beams on the first ring, added stress-free in the stressed ground.
 
-    The beam nodes start at the soil nodes' gravity displacement, so that the beams (whose
-    coordinate transformation measures from the nodal displacements at creation) carry only
-    what follows."""
+    The beam nodes are new, at rest on the undeformed circle, and tied to the soil nodes by
+    stiff links (``zeroLength``, LINK_STIFFNESS per direction) that measure from the moment they
+    are added: the gravity displacement of the soil (up to ~1 m with E = 6 MPa: the strain of the
+    whole geostatic state) neither loads nor distorts the ring."""
     tunnel = scenario.tunnel
     nt = mesh.n_theta
     ops.model("basic", "-ndm", 2, "-ndf", 3)
     beam_base = _next_tag(ops.getNodeTags())
     ele_base = _next_tag(ops.getEleTags())
+    link_material = 1  # the other uniaxial materials take tags derived from element tags (> 1)
+    ops.uniaxialMaterial("Elastic", link_material, LINK_STIFFNESS)
     for j in range(nt + 1):
-        soil_node = int(mesh.node_tag(0, j))
         ops.node(beam_base + j, *map(float, mesh.xy(0, j)))
-        for dof, value in enumerate(ops.nodeDisp(soil_node), start=1):
-            ops.setNodeDisp(beam_base + j, dof, value, "-commit")
-        ops.equalDOF(soil_node, beam_base + j, 1, 2)
     ops.fix(beam_base, 0, 0, 1)
     ops.fix(beam_base + nt, 0, 0, 1)
     ops.geomTransf("Linear", 1)
@@ -537,7 +539,16 @@ def _add_lining(ops, scenario: Scenario, mesh: SectionMesh) -> None:
             "elasticBeamColumn", ele_base + j, beam_base + j, beam_base + j + 1,
             h, e_plane, h**3 / 12.0, 1, "-mass", tunnel.density * h,
         )  # fmt: skip
+    # zeroLength needs the same dofs at both ends: link the soil to 2-dof twins of the beam nodes
     ops.model("basic", "-ndm", 2, "-ndf", 2)
+    twin_base = beam_base + nt + 1
+    for j in range(nt + 1):
+        ops.node(twin_base + j, *map(float, mesh.xy(0, j)))
+        ops.equalDOF(twin_base + j, beam_base + j, 1, 2)
+        ops.element(
+            "zeroLength", ele_base + nt + j, int(mesh.node_tag(0, j)), twin_base + j,
+            "-mat", link_material, link_material, "-dir", 1, 2,
+        )  # fmt: skip
 
 
 def _apply_gravity(ops, scenario, mesh, soil_law):
