@@ -1,4 +1,4 @@
-"""Time one passage of the paper case through the FE section (MODEL.md §12).
+"""Time one passage of the paper case through the FE section (docs/model.md §12).
 
 Run: ``python benchmarks/bench_fe.py [elastic|mohr_coulomb ...]`` (default: both). For each soil
 law it runs the pipeline once for the line load, then ``run_fe`` with one passage on the default

@@ -1,5 +1,5 @@
 """The paper's elastic–plastic finite-element check of the section, rebuilt on OpenSeesPy
-(MODEL.md §12).
+(docs/model.md §12; the study and the results are in docs/fe_section.md).
 
 Model (plane strain, 1 m thick slice, y up, origin on the tunnel axis):
 
@@ -14,9 +14,9 @@ Model (plane strain, 1 m thick slice, y up, origin on the tunnel axis):
   ``ELEMENTS_PER_WAVELENGTH`` elements (else the mesh is refused).
 - **Lining.** Elastic beam elements (``elasticBeamColumn``) on the ring radius a, the chords of
   the circle between the soil nodes of the first ring, with the plane-strain modulus
-  E/(1 − ν²), area h·1 m, inertia h³/12 and mass ρh per metre: the thin ring of MODEL.md §7,
-  with the soil starting at the ring radius, as in the analytical model. Beam and soil nodes
-  share their displacements (``equalDOF``).
+  E/(1 − ν²), area h·1 m, inertia h³/12 and mass ρh per metre: the thin ring of docs/model.md
+  §7, with the soil starting at the ring radius, as in the analytical model. Added after the
+  gravity stage, tied to the soil nodes by stiff links (see ``_add_lining``).
 - **Absorbing boundary.** Viscous–spring (Kelvin) boundary on the circle r = R: per unit length
   a Lysmer–Kuhlemeyer dashpot ρc₁ normal and ρc₂ tangential, in parallel with springs
   α_N G/R and α_T G/R (α_N = 1, α_T = 1/2; Deeks & Randolph 1994, Liu et al. 2006), which carry
@@ -33,22 +33,25 @@ Model (plane strain, 1 m thick slice, y up, origin on the tunnel axis):
   the lining wished in place with its own weight; the tunnel perturbs the field locally.
 - **Soil laws.** ``"elastic"``: ``ElasticIsotropic`` (E, ν, ρ). ``"mohr_coulomb"``: the
   undrained (φ_u = 0) Mohr–Coulomb, i.e. Tresca, criterion matched in plane strain by
-  Drucker–Prager (OpenSees ``DruckerPrager``, perfectly plastic, associated), with the
-  undrained strength c_u(z) of MODEL.md §10 (``longterm.cu_ratio`` × σ′_v0, or
+  Drucker–Prager with zero friction, i.e. von Mises with σ_Y = √3 c_u (OpenSees
+  ``J2Plasticity``, perfectly plastic, associated), with the
+  undrained strength c_u(z) of docs/model.md §10 (``longterm.cu_ratio`` × σ′_v0, or
   ``longterm.undrained_strength``). Why undrained and c_u: a passage lasts seconds, far too short
   for the soft clay to drain; the strength is the one the long-term model uses. Because the
   φ = 0 criterion ignores the mean stress, the plastic model carries the geostatic stress
   minus its in-plane mean (a statically admissible isotropic part removed, body force
   adjusted): the deviator is the K0 one and the out-of-plane stress equals the in-plane mean,
   as in undrained plane strain, where the drained Poisson ratio would otherwise put an
-  out-of-plane deviator into the criterion. Elements above the ground surface (the fictitious
-  upper part of the full space) stay elastic.
+  out-of-plane deviator into the criterion. Only elements within ``FEMesh.plastic_radius`` of
+  the axis and below the ground surface are plastic; the others (including the fictitious upper
+  part of the full space) stay elastic.
 - **Dynamics.** Newmark average acceleration (γ = 1/2, β = 1/4). Rayleigh damping
   C = a₀M + a₁K_init with ζ = η_G/2 at the two ends of the load band [f_lo, f_hi] (below that
   band the mass term over-damps, between the ends ζ dips below η_G/2). The line load of the
-  pipeline (MODEL.md §6) is averaged over each FE step (a box filter that keeps the impulse)
+  pipeline (docs/model.md §6) is averaged over each FE step (a box filter that keeps the impulse)
   and applied downward at the invert.
-- **Passages.** Each passage is followed by a quiet tail (waves leave, the response decays),
+- **Passages.** Each passage is followed by a quiet tail (R/c₂ plus the boundary's relaxation
+  time ρc₁R/(α_N G): waves leave, the response decays),
   then a static equilibrium solve with the train gone: for elastic soil it returns exactly to
   the state before the passage, so the displacement left is the permanent (plastic) one. The
   next passage starts from rest.
@@ -330,7 +333,7 @@ class Geostatic:
 
 
 def geostatic(scenario: Scenario) -> Geostatic:
-    """The geostatic field of the scenario's long-term ground parameters (MODEL.md §10)."""
+    """The geostatic field of the scenario's long-term ground parameters (docs/model.md §10)."""
     lt = scenario.longterm
     return Geostatic(
         axis_depth=lt.axis_depth,
@@ -341,7 +344,7 @@ def geostatic(scenario: Scenario) -> Geostatic:
 
 
 def undrained_strength(scenario: Scenario, y) -> np.ndarray:
-    """c_u at height y above the axis (Pa): given, or cu_ratio · σ′_v0 (MODEL.md §10)."""
+    """c_u at height y above the axis (Pa): given, or cu_ratio · σ′_v0 (docs/model.md §10)."""
     lt = scenario.longterm
     if lt.undrained_strength is not None:
         return np.full(np.shape(y), float(lt.undrained_strength))
@@ -881,7 +884,7 @@ def _element_stress(ops, mesh: SectionMesh) -> np.ndarray:
 
 
 def analytical_profile(scenario: Scenario, line_load_N_per_m, dt_s: float, depth_m):
-    """Peak downward displacement of the analytical 2D model (MODEL.md §7–8) at given depths.
+    """Peak downward displacement of the analytical 2D model (docs/model.md §7–8) at given depths.
 
     ``model.settlement.soil_response`` on the same load history, its depth grid reaching the
     deepest requested depth; interpolated (linearly) to ``depth_m``.
@@ -976,7 +979,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog="python -m model fe",
-        description="Run the OpenSeesPy plane-strain section (MODEL.md §12) and store its "
+        description="Run the OpenSeesPy plane-strain section (docs/model.md §12) and store its "
         "depth profile of peak and permanent displacement.",
     )
     add_scenario_arguments(parser)
