@@ -7,7 +7,8 @@ load, a Hann pulse at the invert (50 kN/m peak, 0.4 s long in a 1 s record: band
 without and with the soil's hysteretic damping. Run: ``python docs/fe_study.py`` (~15 min).
 
 The paper case (the pipeline's line load, three passages) is run per soil law and stored, then
-tabulated: ``python docs/fe_study.py paper elastic DIR``, ``... paper mohr_coulomb DIR``,
+tabulated: ``python docs/fe_study.py paper elastic DIR [PASSAGES]``, ``... paper mohr_coulomb
+DIR``,
 ``python docs/fe_study.py table DIR``.
 """
 
@@ -87,10 +88,10 @@ def main() -> None:
             print(f"| {radius:.0f} | {n} | {e0:+.2%} | {emax:.2%} | {s:.0f} |")
 
 
-def paper(law: str, folder: str) -> None:
+def paper(law: str, folder: str, passages: int = PAPER_PASSAGES) -> None:
     """Run the paper case with one soil law and store it in ``folder``."""
     start = time.perf_counter()
-    result = run_fe(Scenario.paper(), law, passages=PAPER_PASSAGES, mesh=PAPER_MESH)
+    result = run_fe(Scenario.paper(), law, passages=passages, mesh=PAPER_MESH)
     path = save_fe_result(result, folder)
     print(f"{law}: {time.perf_counter() - start:.0f} s, {result.mesh}, {result.timings_s} → {path}")
 
@@ -123,7 +124,7 @@ def table(folder: str) -> None:
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["paper"]:
-        paper(sys.argv[2], sys.argv[3])
+        paper(sys.argv[2], sys.argv[3], *map(int, sys.argv[4:5]))
     elif sys.argv[1:2] == ["table"]:
         table(sys.argv[2])
     else:
