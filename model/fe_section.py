@@ -741,9 +741,12 @@ def run_fe(
     start = time.perf_counter()
     report("load", 0.0)
     if load is None:
-        from model.pipeline import run
+        from model.pipeline import STAGES, run
 
-        results = run(scenario, progress=lambda s, f: report("load", f), cache=None)
+        def pipeline_progress(stage: str, fraction: float) -> None:
+            report("load", (STAGES.index(stage) + fraction) / len(STAGES))
+
+        results = run(scenario, progress=pipeline_progress, cache=None)
         q_raw, dt_raw = results.load.line_load_N_per_m, float(results.load.t_s[1])
     else:
         q_raw, dt_raw = np.asarray(load[0], dtype=float), float(load[1])
