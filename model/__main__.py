@@ -80,17 +80,18 @@ def load_scenario(args: argparse.Namespace) -> Scenario:
 
 
 class TerminalProgress:
-    """Text progress bar on stderr, shown once a run has lasted ``PROGRESS_AFTER_S``."""
+    """Text progress bar on stderr, shown once a run has lasted ``PROGRESS_AFTER_S``; ``stages``
+    are the stage names reported, in order (default: the pipeline's)."""
 
-    def __init__(self, stream=sys.stderr, width: int = 30):
-        self.stream, self.width = stream, width
+    def __init__(self, stream=sys.stderr, width: int = 30, stages: tuple[str, ...] = STAGES):
+        self.stream, self.width, self.stages = stream, width, stages
         self.start = time.perf_counter()
         self.shown = False
 
     def __call__(self, stage: str, fraction: float) -> None:
         if time.perf_counter() - self.start < PROGRESS_AFTER_S:
             return
-        overall = (STAGES.index(stage) + fraction) / len(STAGES)
+        overall = (self.stages.index(stage) + fraction) / len(self.stages)
         filled = round(overall * self.width)
         bar = "#" * filled + "-" * (self.width - filled)
         self.stream.write(f"\r[{bar}] {overall:4.0%} {stage:<14}")

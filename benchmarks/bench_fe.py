@@ -1,0 +1,63 @@
+"""Time one passage of the paper case through the FE section (docs/model.md §12).
+
+Run: ``python benchmarks/bench_fe.py [elastic|mohr_coulomb ...]`` (default: both). For each soil
+law it runs the pipeline once for the line load, then ``run_fe`` with one passage on the default
+mesh (R = 30 m, element size λ_min/6 from the load band, 20 steps per period of f_high), and
+prints the mesh, the wall time of each phase and the peak and permanent displacement at the
+invert and at 11 m, beside the analytical 2D model on the same load. Target: minutes, not hours.
+Timings are wall-clock on a shared machine, with the process's CPU time beside them (the
+figure to compare between machines).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from model.fe_section import run_fe  # noqa: E402
+from model.params import Scenario  # noqa: E402
+from model.pipeline import run  # noqa: E402
+
+MM = 1e3
+
+
+def main(laws: list[str]) -> None:
+    """Run and print each law."""
+    scenario = Scenario.paper()
+    results = run(scenario, cache=None)
+    load = (results.load.line_load_N_per_m, float(results.load.t_s[1]))
+    depth, analytical = results.soil.depth_m, results.soil.peak_disp_m
+    print(
+        f"analytical 2D: invert {analytical[0] * MM:.2f} mm, "
+        f"11 m {np.interp(11.0, depth, analytical) * MM:.2f} mm"
+    )
+    for law in laws:
+        start, cpu_start = time.perf_counter(), time.process_time()
+        fe = run_fe(scenario, law, load=load)
+        total, cpu = time.perf_counter() - start, time.process_time() - cpu_start
+        mesh = fe.mesh
+        print(
+            f"{law}: {mesh['n_elements']} elements ({mesh['n_plastic_elements']} plastic), "
+            f"{mesh['n_theta']} × {mesh['n_rings']}, h = {mesh['element_size_m']:.2f} m, "
+            f"R = {mesh['outer_radius_m']:.0f} m, band {mesh['band_hz'][0]:.2f}–"
+            f"{mesh['band_hz'][1]:.2f} Hz, Δt = {mesh['dt_s'] * 1e3:.1f} ms × "
+            f"{mesh['steps_per_passage']} steps"
+        )
+        phases = ", ".join(f"{name} {seconds:.1f} s" for name, seconds in fe.timings_s.items())
+        print(f"  wall time {total:.0f} s ({phases}); CPU time {cpu:.0f} s")
+        print(
+            f"  peak: invert {fe.peak_disp_m[0] * MM:.2f} mm, "
+            f"11 m {np.interp(11.0, fe.depth_m, fe.peak_disp_m) * MM:.2f} mm; permanent: "
+            f"invert {fe.residual_disp_m[0] * MM:.3f} mm, "
+            f"11 m {np.interp(11.0, fe.depth_m, fe.residual_disp_m) * MM:.3f} mm"
+        )
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:] or ["elastic", "mohr_coulomb"])
