@@ -16,8 +16,10 @@ import asyncio
 import html
 import io
 import logging
+import os
 import re
 from concurrent.futures import Executor, Future
+from pathlib import Path
 
 import holoviews as hv
 import panel as pn
@@ -32,6 +34,7 @@ from dashboard.scheduler import EXECUTOR, LatestRun, warm_up, warm_up_run
 from dashboard.study_view import StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
+from model.fe_section import FEResult, stored_fe_result
 from model.params import SECTIONS, Scenario, ScenarioError
 from model.pipeline import STAGES, Results, SimulationError, StageCache, run, stage_keys
 
@@ -60,6 +63,10 @@ HIDDEN = {"irregularity.profile_csv"}
 
 ALL_PLOTS = (*plots.PLOTS, *LONGTERM_PLOTS)
 """Every plot of the page: the passage plots, then the long-term ones."""
+
+FE_RESULTS_DIR = Path(os.environ.get("TUNNELSETTLE_FE_RESULTS", "fe_results"))
+"""Where ``python -m model fe --out`` results are looked up for the depth plot (relative to the
+server's working directory unless absolute)."""
 
 OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
 """The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
@@ -99,14 +106,15 @@ def _note_html(text: str) -> str:
     return f'<div style="font-size: 12px; color: #57606a">{html.escape(text)}</div>'
 
 
-def _dynamic(spec: plots.PlotSpec, overlays, other_model):
+def _dynamic(spec: plots.PlotSpec, overlays, companions):
     """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``), with the
-    pinned runs (``overlays()``) on the passage plots and the other tunnel–soil model's
-    profile (``other_model()``) on the depth plot."""
+    pinned runs (``overlays()``) on the passage plots, and on the depth plot the other
+    tunnel–soil model's profile and a stored FE result (``companions()``: a dict of keyword
+    arguments)."""
 
     def callback(data):
         if spec.key == plots.MODEL_COMPARISON_PLOT:
-            return spec.draw(data, overlays=overlays(), other_model=other_model())
+            return spec.draw(data, overlays=overlays(), **companions())
         if spec in plots.PLOTS:
             return spec.draw(data, overlays=overlays())
         return spec.draw(data)
@@ -158,6 +166,8 @@ class Dashboard(pn.viewable.Viewer):
         self.results: Results | None = None
         self.other_model: Results | None = None
         """The same scenario with the other tunnel–soil model, drawn faint on the depth plot."""
+        self.fe_result: FEResult | None = None
+        """A stored FE result of the current scenario (``python -m model fe``), if any."""
         self.render_counts = dict.fromkeys(STAGES, 0)
         self.runs = LatestRun(self._compute, executor)
         self._shown_keys: dict[str, str] = {}
@@ -398,7 +408,7 @@ class Dashboard(pn.viewable.Viewer):
         for pane in self.plot_panes.values():
             pane.object = None
         self.plot_streams.clear()
-        self.results = self.other_model = None
+        self.results = self.other_model = self.fe_result = None
 
     # ---- editing ----------------------------------------------------------------------------
     def _on_parameter(self, *events: param.parameterized.Event) -> None:
@@ -532,29 +542,33 @@ class Dashboard(pn.viewable.Viewer):
                 f'<span class="computing">Computing {_stage_name(stage)}… {fraction:.0%}</span>'
             )
 
-    def _compute(self, scenario: Scenario) -> tuple[Results, Results | None]:
+    def _compute(self, scenario: Scenario) -> tuple[Results, Results | None, FEResult | None]:
         """Run the pipeline with the app's cache (in a worker thread), then the same scenario
         with the other tunnel–soil model (its vehicle–track and load stages come from the
-        cache; a failure of that comparison only leaves its curve out)."""
+        cache; a failure of that comparison only leaves its curve out), and look up a stored
+        FE result of the scenario."""
         if self.warm is not None:
             self.warm.result()  # the kernels compile once, not once per waiting session
         results = run(scenario, progress=self._note_progress, cache=self.cache)
+        fe_result = stored_fe_result(scenario, FE_RESULTS_DIR)
         other = scenario.copy()
         other.tunnel.model = OTHER_MODEL[scenario.tunnel.model]
         try:
-            return results, run(other, cache=self.cache)
+            return results, run(other, cache=self.cache), fe_result
         except (ValueError, SimulationError):
-            return results, None
+            return results, None, fe_result
 
     def _finish(
-        self, scenario: Scenario, outcome: tuple[Results, Results | None] | BaseException
+        self,
+        scenario: Scenario,
+        outcome: tuple[Results, Results | None, FEResult | None] | BaseException,
     ) -> None:
         """Show a run's results (redrawing only the plots whose stage changed) or its error."""
         self.progress.param.update(visible=False, active=False)
         if isinstance(outcome, BaseException):
             self._show_failure(outcome)
             return
-        results, self.other_model = outcome
+        results, self.other_model, self.fe_result = outcome
         redrawn = self._stale_stages(results.scenario)
         for spec in ALL_PLOTS:
             pane = self.plot_panes[spec.key]
@@ -586,8 +600,12 @@ class Dashboard(pn.viewable.Viewer):
         """A new plot of ``results``; its stream then updates it in place."""
         stream = self.plot_streams[spec.key] = Pipe(data=results)
         self.plot_panes[spec.key].object = hv.DynamicMap(
-            _dynamic(spec, self.whatif.overlays, lambda: self.other_model), streams=[stream]
+            _dynamic(spec, self.whatif.overlays, self._depth_companions), streams=[stream]
         )
+
+    def _depth_companions(self) -> dict:
+        """The other tunnel–soil model's results and the stored FE result, for the depth plot."""
+        return {"other_model": self.other_model, "fe_result": self.fe_result}
 
     def _redraw_overlays(self, _event=None) -> None:
         """The pinned runs changed: new passage plots (a plot's set of curves is fixed when

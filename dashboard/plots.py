@@ -18,6 +18,7 @@ import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used
 import numpy as np
 
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
+from model.fe_section import FEResult
 from model.params import DATA_DIR, Soil
 from model.pipeline import Results
 
@@ -57,6 +58,7 @@ PINNED_LINE_WIDTH = 1.5
 # dark grey so that every colour of the legend names a run.
 REFERENCE_COLOUR = "#555555"
 OTHER_MODEL_COLOUR = "#888888"  # the other tunnel–soil model: faint, behind the runs
+FE_COLOUR = "#8c564b"  # a stored FE result of the same scenario
 
 
 @dataclass(frozen=True)
@@ -270,7 +272,10 @@ MODEL_NAMES = {"2d": "2D section", "2.5d": "2.5D moving load"}
 """Legend names of the tunnel–soil models."""
 
 MODEL_COMPARISON_PLOT = "depth_profile"
-"""The plot that also draws the other tunnel–soil model's profile (``other_model``)."""
+"""The plot that also draws the other tunnel–soil model's profile (``other_model``) and a
+stored FE result (``fe_result``)."""
+
+FE_LAW_NAMES = {"elastic": "elastic", "mohr_coulomb": "Mohr–Coulomb"}
 
 
 def depth_profile_plot(
@@ -279,10 +284,12 @@ def depth_profile_plot(
     *,
     overlays: Overlays = (),
     other_model: Results | None = None,
+    fe_result: FEResult | None = None,
 ) -> hv.Overlay:
     """Peak dynamic displacement against depth below the invert, with the paper's points;
-    pinned runs (``overlays``) are drawn under the current run, and ``other_model`` (the same
-    scenario with the other tunnel–soil model) as a faint dashed curve."""
+    pinned runs (``overlays``) are drawn under the current run, ``other_model`` (the same
+    scenario with the other tunnel–soil model) as a faint dashed curve, and a stored FE result
+    of the same scenario (``fe_result``, model.fe_section) as a dotted curve."""
     reference = paper_reference() if reference is None else reference
     current_label = "This model"
     if other_model is not None and results is not None:
@@ -295,6 +302,15 @@ def depth_profile_plot(
             _depth_curve(other_model, name).opts(
                 color=OTHER_MODEL_COLOUR, line_dash="dashed", line_width=1.5, alpha=0.6
             ),
+        )
+    if fe_result is not None:
+        layers.append(
+            hv.Curve(
+                (fe_result.peak_disp_m * MM, fe_result.depth_m),
+                kdims=[PEAK_DISP],
+                vdims=[DEPTH],
+                label=f"FE section ({FE_LAW_NAMES[fe_result.soil_law]})",
+            ).opts(color=FE_COLOUR, line_dash="dotted", line_width=2, **_FOLLOW_DATA)
         )
     markers = ("circle", "triangle", "square", "diamond")
     for series, marker in zip(reference, markers, strict=False):

@@ -9,6 +9,7 @@ import html
 import io
 import json
 import re
+from types import SimpleNamespace
 
 import holoviews as hv
 import numpy as np
@@ -568,3 +569,12 @@ def test_pinning_works_once_the_inputs_are_custom(dashboard):
     dashboard.whatif.pin_button.clicks += 1
     assert len(dashboard.whatif.session.runs) == 1
     assert "8 MPa" in dashboard.whatif.session.runs[0].name
+
+
+def test_depth_plot_draws_a_stored_fe_result(results):
+    """A stored FE result of the scenario appears on the depth plot as its own curve (mm)."""
+    fe = SimpleNamespace(
+        soil_law="mohr_coulomb", depth_m=np.array([0.0, 5.0]), peak_disp_m=np.array([2e-3, 1e-3])
+    )
+    curves = _curves(plots.depth_profile_plot(results, fe_result=fe))
+    np.testing.assert_allclose(curves["FE section (Mohr–Coulomb)"].dimension_values(0), [2, 1])
