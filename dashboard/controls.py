@@ -194,7 +194,9 @@ class ParameterControl(pn.viewable.Viewer):
     def _set(self, value, typed: str) -> None:
         """Set the parameter from a display value; refuse it with a message in display units."""
         si = value
-        if isinstance(value, float) and self.factor != 1.0:
+        # A slider may send a whole number as an int: it is still in display units.
+        numeric = isinstance(value, int | float) and not isinstance(value, bool)
+        if numeric and self.factor != 1.0:
             si = _clean(value / self.factor)
         self._report(self.path, None)  # before the update: the run it starts may report
         try:

@@ -578,3 +578,11 @@ def test_depth_plot_draws_a_stored_fe_result(results):
     )
     curves = _curves(plots.depth_profile_plot(results, fe_result=fe))
     np.testing.assert_allclose(curves["FE section (Mohr–Coulomb)"].dimension_values(0), [2, 1])
+
+
+def test_a_whole_number_from_the_slider_is_in_display_units(dashboard):
+    """Bokeh sends a slider position of 16 (MPa) as the int 16: it must become 16e6 Pa, not
+    16 Pa (which the soil bounds refuse; before those bounds it was silently taken as 16 Pa)."""
+    control = dashboard.controls["soil.youngs_modulus"]
+    control.slide(16)
+    assert dashboard.scenario.soil.youngs_modulus == 16e6
