@@ -116,6 +116,7 @@ def panel_free(repeat: int) -> None:
 
 def browser(repeat: int) -> None:
     """Slider-change response in the browser with the 8 pinned runs hidden and shown."""
+    from bench_dashboard import PAINTED_JS, warm_numba_caches
     from playwright.sync_api import sync_playwright
     from test_browser import (
         STAGE_OF_PLOT,
@@ -127,12 +128,6 @@ def browser(repeat: int) -> None:
         type_value,
         wait_for_new_data,
     )
-    from test_browser_whatif import WIRED
-
-    if not WIRED:
-        print("browser part skipped: dashboard/app.py does not use WhatIfPanel yet")
-        return
-    from bench_dashboard import PAINTED_JS, warm_numba_caches
 
     def timed_change(page, path, value, stages):
         counts, before = render_counts(page), signatures(page)
