@@ -16,7 +16,6 @@ frequencies in parallel over Numba's threads; the 2.5D kernels are serial (nogil
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numba
@@ -25,25 +24,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.bench_soil import best_of  # noqa: E402
 from model.params import Scenario  # noqa: E402
 from model.pipeline import run  # noqa: E402
 from model.settlement import soil_response  # noqa: E402
 from model.tunnel_soil_3d import point_load_response  # noqa: E402
 
 REPEATS = 3
-
-
-def best_of(function, repeats: int) -> tuple[float, float]:
-    """Seconds of the first call and the best of ``repeats`` further calls."""
-    start = time.perf_counter()
-    function()
-    first = time.perf_counter() - start
-    best = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        best = min(best, time.perf_counter() - start)
-    return first, best
 
 
 def main() -> None:

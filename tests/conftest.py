@@ -3,6 +3,7 @@
 import pytest
 
 from model.params import Scenario
+from model.pipeline import StageCache, run
 
 
 def _cheap_scenario() -> Scenario:
@@ -17,3 +18,23 @@ def _cheap_scenario() -> Scenario:
 def cheap_scenario():
     """Factory of a fresh cheap scenario: the whole pipeline runs in about a second."""
     return _cheap_scenario
+
+
+@pytest.fixture(scope="module")
+def cache():
+    """A stage cache shared by the tests of one module."""
+    return StageCache()
+
+
+@pytest.fixture(scope="module")
+def base_results(cache, cheap_scenario):
+    """The cheap scenario's results (what-if tests: the run that gets pinned)."""
+    return run(cheap_scenario(), cache=cache)
+
+
+@pytest.fixture(scope="module")
+def stiff_results(cache, cheap_scenario):
+    """The cheap scenario with a stiffer soil (what-if tests: a run that differs)."""
+    scenario = cheap_scenario()
+    scenario.soil.youngs_modulus = 12e6
+    return run(scenario, cache=cache)

@@ -39,24 +39,7 @@ from dashboard.whatif import (
     save_session,
 )
 from model.params import Scenario
-from model.pipeline import StageCache, run
-
-
-@pytest.fixture(scope="module")
-def cache():
-    return StageCache()
-
-
-@pytest.fixture(scope="module")
-def base_results(cache, cheap_scenario):
-    return run(cheap_scenario(), cache=cache)
-
-
-@pytest.fixture(scope="module")
-def stiff_results(cache, cheap_scenario):
-    scenario = cheap_scenario()
-    scenario.soil.youngs_modulus = 12e6
-    return run(scenario, cache=cache)
+from model.pipeline import run
 
 
 class CountingCompute:

@@ -11,24 +11,7 @@ import pytest
 from dashboard.whatif import CURRENT_LABEL, MAX_PINNED, PINNED_COLOURS, SESSION_FORMAT
 from dashboard.whatif_view import WhatIfPanel
 from model.params import Scenario
-from model.pipeline import StageCache, run
-
-
-@pytest.fixture(scope="module")
-def cache():
-    return StageCache()
-
-
-@pytest.fixture(scope="module")
-def base_results(cache, cheap_scenario):
-    return run(cheap_scenario(), cache=cache)
-
-
-@pytest.fixture(scope="module")
-def stiff_results(cache, cheap_scenario):
-    scenario = cheap_scenario()
-    scenario.soil.youngs_modulus = 12e6
-    return run(scenario, cache=cache)
+from model.pipeline import run
 
 
 class FakeDashboard:
