@@ -266,8 +266,51 @@ def stress_response(line_load_N_per_m, dt_s: float, depth_m, scenario) -> Stress
     return _deviator_response(grid, depth, _grid_transfer(grid.f_hz, depth, scenario)[1])
 
 
+@dataclass(frozen=True)
+class SectionTransfer:
+    """The tunnel–soil kernel at a padded record's frequencies and the output depths.
+
+    It depends on the record's length and step, the tunnel, the soil and the numerics, not on
+    the load itself: runs that differ only in the load (irregularity seed, vehicle, track)
+    share it, which is what :func:`model.pipeline.run` caches.
+    """
+
+    f_hz: np.ndarray
+    """(nf,) frequencies of the padded record's grid (Hz); row 0 of the transfer functions
+    holds the DC band value."""
+    depth_m: np.ndarray
+    """(nd,) output depths below the ring–soil interface (m)."""
+    receptance: np.ndarray
+    """(nf, nd) complex displacement per unit line load (m per N/m)."""
+    stresses: StressField
+    """(nf, nd) complex stresses per unit line load (Pa per N/m)."""
+
+
+def section_transfer(line_load_N_per_m, dt_s: float, scenario) -> SectionTransfer:
+    """Receptance and stresses under the invert on the grid of a load record.
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Load record q(t) (N/m); only its length and step set the grid.
+    dt_s : float
+        Sampling interval (s), > 0.
+    scenario : model.params.Scenario
+        As :func:`section_response`.
+
+    Returns
+    -------
+    SectionTransfer
+    """
+    numerics = scenario.numerics
+    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    depth = output_depths(numerics)
+    receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
+    return SectionTransfer(grid.f_hz, depth, receptance, stresses)
+
+
 def section_response(
-    line_load_N_per_m, dt_s: float, scenario
+    line_load_N_per_m, dt_s: float, scenario, transfer: SectionTransfer | None = None
 ) -> tuple[SoilResponse, StressResponse]:
     """Displacements and stresses under the invert for a line-load history, one kernel pass.
 
@@ -284,15 +327,30 @@ def section_response(
     scenario : model.params.Scenario
         Uses tunnel, soil, train.speed (2.5D model) and numerics (n_harmonics,
         soil_max_frequency, zero_pad_factor, psd_segment, max_depth, n_depths).
+    transfer : SectionTransfer, optional
+        :func:`section_transfer` of a record of the same length and step and the same
+        scenario, to reuse; computed when not given.
 
     Returns
     -------
     (SoilResponse, StressResponse)
+
+    Raises
+    ------
+    ValueError
+        ``transfer`` was made on another frequency grid or other depths.
     """
     numerics = scenario.numerics
     grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
     depth = output_depths(numerics)
-    receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
+    if transfer is None:
+        receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
+    elif np.array_equal(transfer.f_hz, grid.f_hz) and np.array_equal(transfer.depth_m, depth):
+        receptance, stresses = transfer.receptance, transfer.stresses
+    else:
+        raise ValueError(
+            "transfer was computed on another frequency grid or other depths than this record's"
+        )
     soil = displacement_response(grid, depth, receptance, numerics)
     return soil, _deviator_response(grid, depth, stresses)
 

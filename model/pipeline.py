@@ -16,11 +16,12 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import threading
 import time
 import warnings
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +33,7 @@ from model.longterm import (
     check_longterm_inputs,
     long_term_settlement,
     section_response,
+    section_transfer,
 )
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
@@ -134,40 +136,62 @@ class Results:
         }
 
 
+# Not a stage of its own (no progress is reported for it): the soil stage's tunnel–soil kernel
+# on the record's frequency grid, cached apart from the load so that runs differing only in the
+# load (seed, vehicle, track) reuse it. Its entries are large (tens of MB), hence few.
+TRANSFER = "soil_transfer"
+
+
 class StageCache:
-    """Small LRU cache per stage, keyed on the JSON of the parameters the stage reads.
+    """Small thread-safe LRU cache per stage, keyed on the JSON of the parameters it reads.
 
     Values are stored read-only (see :func:`run`), so a caller cannot change what a later run
     is served. The caller owns the cache: :func:`run` uses one only when it is passed.
+
+    Parameters
+    ----------
+    size : int
+        Entries kept per stage.
+    transfer_size : int
+        Entries kept of the soil stage's tunnel–soil transfer functions (``TRANSFER``).
     """
 
-    def __init__(self, size: int = 4):
-        self.size = size
-        self._entries: dict[str, OrderedDict[str, Any]] = {s: OrderedDict() for s in STAGES}
-        self.hits = dict.fromkeys(STAGES, 0)
-        self.misses = dict.fromkeys(STAGES, 0)
+    def __init__(self, size: int = 4, transfer_size: int = 2):
+        self.size, self.transfer_size = size, transfer_size
+        self._lock = threading.Lock()
+        names = (*STAGES, TRANSFER)
+        self._entries: dict[str, OrderedDict[str, Any]] = {s: OrderedDict() for s in names}
+        self.hits = dict.fromkeys(names, 0)
+        self.misses = dict.fromkeys(names, 0)
 
     def get(self, stage: str, key: str):
         """Cached value or None; counts the hit or miss."""
-        entries = self._entries[stage]
-        if key in entries:
-            entries.move_to_end(key)
-            self.hits[stage] += 1
-            return entries[key]
-        self.misses[stage] += 1
-        return None
+        with self._lock:
+            entries = self._entries[stage]
+            if key in entries:
+                entries.move_to_end(key)
+                self.hits[stage] += 1
+                return entries[key]
+            self.misses[stage] += 1
+            return None
 
     def put(self, stage: str, key: str, value) -> None:
-        """Store a value, evicting the least recently used beyond ``size``."""
-        entries = self._entries[stage]
-        entries[key] = value
-        entries.move_to_end(key)
-        while len(entries) > self.size:
-            entries.popitem(last=False)
+        """Store a value, evicting the least recently used beyond the stage's size."""
+        limit = self.transfer_size if stage == TRANSFER else self.size
+        with self._lock:
+            entries = self._entries[stage]
+            entries[key] = value
+            entries.move_to_end(key)
+            while len(entries) > limit:
+                entries.popitem(last=False)
 
     def clear(self) -> None:
         """Forget every entry and reset the counters."""
-        self.__init__(self.size)
+        with self._lock:
+            for entries in self._entries.values():
+                entries.clear()
+            for counter in (self.hits, self.misses):
+                counter.update(dict.fromkeys(counter, 0))
 
 
 def stage_keys(scenario: Scenario) -> dict[str, str]:
@@ -201,9 +225,14 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v
         soil["speed_kmh"] = data["train"]["speed_kmh"]
     longterm = {"upstream": soil, "longterm": data["longterm"]}
+    # the transfer functions: the soil stage's inputs but the load, whose record's length and
+    # step (which set the frequency grid) run() appends
+    transfer = {name: value for name, value in soil.items() if name != "upstream"}
     return {
         name: json.dumps(value, sort_keys=True)
-        for name, value in zip(STAGES, (vehicle_track, load, soil, longterm), strict=True)
+        for name, value in zip(
+            (*STAGES, TRANSFER), (vehicle_track, load, soil, longterm, transfer), strict=True
+        )
     }
 
 
@@ -284,10 +313,19 @@ def run(
             "the vehicle–track simulation went unstable: " + "; ".join(vt.warnings)
         )
     load = stage("load", lambda: _load_stage(vt, scenario))
-    soil, stress = stage(
-        "soil",
-        lambda: section_response(load.line_load_N_per_m, _time_step(load.t_s), scenario),
-    )
+
+    def soil_stage():
+        q, dt = load.line_load_N_per_m, _time_step(load.t_s)
+        if cache is None:
+            return section_response(q, dt, scenario)
+        key = f"{keys[TRANSFER]} record {q.size} × {dt!r} s"
+        transfer = cache.get(TRANSFER, key)
+        if transfer is None:
+            transfer = _read_only(section_transfer(q, dt, scenario))
+            cache.put(TRANSFER, key, transfer)
+        return section_response(q, dt, scenario, transfer)
+
+    soil, stress = stage("soil", soil_stage)
     longterm = stage("longterm", lambda: long_term_settlement(stress, scenario))
     run_warnings = (
         list(vt.warnings)
@@ -309,7 +347,8 @@ def run(
 
 
 def _read_only(stage_result):
-    """The stage result (or tuple of results) with every array field made read-only."""
+    """The stage result (a dataclass, or a tuple of them) with every array in it, nested
+    dataclasses included, made read-only."""
     if isinstance(stage_result, tuple):
         for part in stage_result:
             _read_only(part)
@@ -318,6 +357,8 @@ def _read_only(stage_result):
         value = getattr(stage_result, item.name)
         if isinstance(value, np.ndarray):
             value.flags.writeable = False
+        elif is_dataclass(value):
+            _read_only(value)
     return stage_result
 
 

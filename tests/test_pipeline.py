@@ -82,8 +82,41 @@ def test_cache_serves_exactly_the_stages_a_change_does_not_touch(cheap_scenario)
     scenario.train.speed_kmh = 90.0
     assert run(scenario, cache=cache).cached_stages == ()
     downstream = {"soil": 5, "longterm": 5}
-    assert cache.misses == {"vehicle_track": 2, "load": 3, **downstream}
-    assert cache.hits == {"vehicle_track": 4, "load": 3, **dict.fromkeys(downstream, 1)}
+    transfer = {pipeline.TRANSFER: 5}  # each soil computation above had new soil inputs
+    assert cache.misses == {"vehicle_track": 2, "load": 3, **downstream, **transfer}
+    assert cache.hits == {
+        "vehicle_track": 4, "load": 3, **dict.fromkeys(downstream, 1), pipeline.TRANSFER: 0
+    }  # fmt: skip
+
+
+def test_a_new_load_on_the_same_record_grid_reuses_the_soil_transfer_bit_for_bit(
+    cheap_scenario,
+):
+    """A seed or vehicle change gives a new load of the same length: the soil stage reuses the
+    tunnel–soil kernel's values (the costly part) and gives what a fresh run gives."""
+    cache = StageCache()
+    scenario = cheap_scenario()
+    run(scenario, cache=cache)
+    for change in ({"irregularity": {"seed": 8}}, {"vehicle": {"primary_stiffness": 1.2e6}}):
+        scenario.update(change)
+        served = run(scenario, cache=cache)
+        fresh = run(scenario, cache=None)
+        assert served.cached_stages == ()
+        np.testing.assert_array_equal(served.soil.disp_m, fresh.soil.disp_m)
+        np.testing.assert_array_equal(
+            served.stress.deviator_history_Pa, fresh.stress.deviator_history_Pa
+        )
+    assert cache.hits[pipeline.TRANSFER] == 2 and cache.misses[pipeline.TRANSFER] == 1
+
+
+def test_a_transfer_from_another_grid_is_refused(cheap_scenario):
+    from model.longterm import section_response, section_transfer
+
+    results = run(cheap_scenario(), cache=None)
+    q, dt = results.load.line_load_N_per_m, float(results.load.t_s[1])
+    transfer = section_transfer(q[: q.size // 2], dt, results.scenario)
+    with pytest.raises(ValueError, match="another frequency grid"):
+        section_response(q, dt, results.scenario, transfer)
 
 
 def test_an_edited_profile_file_is_not_served_from_the_cache(tmp_path):
@@ -97,11 +130,14 @@ def test_an_edited_profile_file_is_not_served_from_the_cache(tmp_path):
 
 
 def test_cache_is_bounded():
-    cache = StageCache(size=2)
+    cache = StageCache(size=2, transfer_size=1)
     for key in "abc":
         cache.put("soil", key, key)
+        cache.put(pipeline.TRANSFER, key, key)
     assert cache.get("soil", "a") is None
-    assert cache.get("soil", "c") == "c"
+    assert cache.get("soil", "b") == "b" and cache.get("soil", "c") == "c"
+    assert cache.get(pipeline.TRANSFER, "b") is None
+    assert cache.get(pipeline.TRANSFER, "c") == "c"
 
 
 def test_every_numerics_parameter_is_in_some_stage_key():
