@@ -3,7 +3,9 @@
 Run: ``python benchmarks/bench_study.py [--runs 20] [--workers 2]``. The paper case with
 ``--runs`` irregularity seeds:
 
-- serial: ``run(scenario, cache=None)`` for each seed in this process (warm Numba caches);
+- serial: ``run(scenario, cache=StageCache())`` for each seed in this process (warm Numba
+  caches; the stage cache lets the runs share the tunnel–soil transfer functions, as each study
+  worker's process does, so that the ratio measures the parallelism, not the cache);
 - study, warm cluster: :func:`model.study.execute_study` on a LocalCluster whose workers have
   already loaded the compiled kernels (an existing cluster, the usual case for big studies);
 - study, cold: :func:`model.study.run_study` with ``scheduler=None``, cluster start included;
@@ -28,7 +30,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from model.params import Scenario  # noqa: E402
-from model.pipeline import run  # noqa: E402
+from model.pipeline import StageCache, run  # noqa: E402
 from model.study import define_study, execute_study, run_study, study_client  # noqa: E402
 
 N_NOOP = 200
@@ -48,11 +50,12 @@ def _warm_worker() -> None:
 
 def serial_seconds(base: Scenario, seeds: list[int]) -> tuple[float, float]:
     """Wall and CPU time (this process, all its threads) of the runs one after another."""
+    cache = StageCache(size=1, transfer_size=1)
     start, cpu = time.perf_counter(), time.process_time()
     for seed in seeds:
         scenario = base.copy()
         scenario.irregularity.seed = seed
-        run(scenario, cache=None)
+        run(scenario, cache=cache)
     return time.perf_counter() - start, time.process_time() - cpu
 
 
