@@ -21,6 +21,7 @@ import time
 import warnings
 from collections import OrderedDict
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any
@@ -146,7 +147,9 @@ class StageCache:
     """Small thread-safe LRU cache per stage, keyed on the JSON of the parameters it reads.
 
     Values are stored read-only (see :func:`run`), so a caller cannot change what a later run
-    is served. The caller owns the cache: :func:`run` uses one only when it is passed.
+    is served. Threads that ask :meth:`fetch` for a value another thread is computing wait for
+    it instead of computing it again (ten sessions opening the same page compute it once).
+    The caller owns the cache: :func:`run` uses one only when it is passed.
 
     Parameters
     ----------
@@ -161,32 +164,75 @@ class StageCache:
         self._lock = threading.Lock()
         names = (*STAGES, TRANSFER)
         self._entries: dict[str, OrderedDict[str, Any]] = {s: OrderedDict() for s in names}
+        self._computing: dict[tuple[str, str], Future] = {}
         self.hits = dict.fromkeys(names, 0)
         self.misses = dict.fromkeys(names, 0)
 
     def get(self, stage: str, key: str):
         """Cached value or None; counts the hit or miss."""
         with self._lock:
-            entries = self._entries[stage]
-            if key in entries:
-                entries.move_to_end(key)
-                self.hits[stage] += 1
-                return entries[key]
-            self.misses[stage] += 1
-            return None
+            return self._lookup(stage, key)
+
+    def _lookup(self, stage: str, key: str):
+        """:meth:`get` with the lock held."""
+        entries = self._entries[stage]
+        if key in entries:
+            entries.move_to_end(key)
+            self.hits[stage] += 1
+            return entries[key]
+        self.misses[stage] += 1
+        return None
 
     def put(self, stage: str, key: str, value) -> None:
         """Store a value, evicting the least recently used beyond the stage's size."""
-        limit = self.transfer_size if stage == TRANSFER else self.size
         with self._lock:
-            entries = self._entries[stage]
-            entries[key] = value
-            entries.move_to_end(key)
-            while len(entries) > limit:
-                entries.popitem(last=False)
+            self._store(stage, key, value)
+
+    def _store(self, stage: str, key: str, value) -> None:
+        """:meth:`put` with the lock held."""
+        limit = self.transfer_size if stage == TRANSFER else self.size
+        entries = self._entries[stage]
+        entries[key] = value
+        entries.move_to_end(key)
+        while len(entries) > limit:
+            entries.popitem(last=False)
+
+    def fetch(self, stage: str, key: str, compute: Callable[[], Any]) -> tuple[Any, bool]:
+        """The cached value, or the one another thread is computing, or ``compute()`` stored.
+
+        Returns
+        -------
+        (value, served)
+            ``served`` is False when this call computed the value. An exception of the
+            computing thread is raised in the threads that waited for it too.
+        """
+        with self._lock:
+            pending = self._computing.get((stage, key))
+            owner = pending is None
+            if owner:
+                value = self._lookup(stage, key)
+                if value is not None:
+                    return value, True
+                pending = self._computing[(stage, key)] = Future()
+            else:  # computing in another thread: a hit, once it is done
+                self.hits[stage] += 1
+        if not owner:
+            return pending.result(), True
+        try:
+            value = compute()
+        except BaseException as error:
+            with self._lock:
+                del self._computing[(stage, key)]
+            pending.set_exception(error)
+            raise
+        with self._lock:
+            self._store(stage, key, value)
+            del self._computing[(stage, key)]
+        pending.set_result(value)
+        return value, False
 
     def clear(self) -> None:
-        """Forget every entry and reset the counters."""
+        """Forget every entry and reset the counters (computations under way finish)."""
         with self._lock:
             for entries in self._entries.values():
                 entries.clear()
@@ -290,19 +336,16 @@ def run(
     cached: list[str] = []
 
     def stage(name, compute):
-        value = cache.get(name, keys[name]) if cache is not None else None
-        if value is not None:
-            cached.append(name)
-            seconds[name] = 0.0
-            report(name, 1.0)
-            return value
         report(name, 0.0)
         start = time.perf_counter()
-        value = _read_only(compute())
-        seconds[name] = time.perf_counter() - start
+        if cache is None:
+            value, served = _read_only(compute()), False
+        else:
+            value, served = cache.fetch(name, keys[name], lambda: _read_only(compute()))
+        seconds[name] = 0.0 if served else time.perf_counter() - start
+        if served:
+            cached.append(name)
         report(name, 1.0)
-        if cache is not None:
-            cache.put(name, keys[name], value)
         return value
 
     vt = stage(
@@ -318,11 +361,11 @@ def run(
         q, dt = load.line_load_N_per_m, _time_step(load.t_s)
         if cache is None:
             return section_response(q, dt, scenario)
-        key = f"{keys[TRANSFER]} record {q.size} × {dt!r} s"
-        transfer = cache.get(TRANSFER, key)
-        if transfer is None:
-            transfer = _read_only(section_transfer(q, dt, scenario))
-            cache.put(TRANSFER, key, transfer)
+        transfer, _ = cache.fetch(
+            TRANSFER,
+            f"{keys[TRANSFER]} record {q.size} × {dt!r} s",
+            lambda: _read_only(section_transfer(q, dt, scenario)),
+        )
         return section_response(q, dt, scenario, transfer)
 
     soil, stress = stage("soil", soil_stage)

@@ -3,6 +3,9 @@
 import json
 import subprocess
 import sys
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -138,6 +141,48 @@ def test_cache_is_bounded():
     assert cache.get("soil", "b") == "b" and cache.get("soil", "c") == "c"
     assert cache.get(pipeline.TRANSFER, "b") is None
     assert cache.get(pipeline.TRANSFER, "c") == "c"
+
+
+def test_a_value_being_computed_is_waited_for_not_computed_again():
+    """Threads asking for the same stage value while one computes it get that value; an
+    exception of the computing thread reaches them too, and the next call computes afresh."""
+    cache = StageCache()
+    calls, gate = [], threading.Event()
+
+    def slow():
+        calls.append(1)
+        gate.wait(5.0)
+        return "value"
+
+    with ThreadPoolExecutor(4) as pool:
+        futures = [pool.submit(cache.fetch, "soil", "k", slow) for _ in range(4)]
+        time.sleep(0.2)
+        gate.set()
+        outcomes = [f.result() for f in futures]
+    assert len(calls) == 1
+    assert sorted(outcomes) == [("value", False)] + [("value", True)] * 3
+
+    def failing():
+        gate.wait(5.0)
+        raise ValueError("bad input")
+
+    gate.clear()
+    with ThreadPoolExecutor(2) as pool:
+        futures = [pool.submit(cache.fetch, "load", "k", failing) for _ in range(2)]
+        time.sleep(0.2)
+        gate.set()
+        for future in futures:
+            with pytest.raises(ValueError, match="bad input"):
+                future.result()
+    assert cache.fetch("load", "k", lambda: "now") == ("now", False)
+
+
+def test_concurrent_runs_of_one_scenario_compute_each_stage_once(cheap_scenario):
+    cache = StageCache()
+    with ThreadPoolExecutor(2) as pool:
+        first, second = pool.map(lambda s: run(s, cache=cache), [cheap_scenario()] * 2)
+    assert cache.misses["vehicle_track"] == 1 and cache.misses["soil"] == 1
+    assert first.soil.peak_disp_m is second.soil.peak_disp_m
 
 
 def test_every_numerics_parameter_is_in_some_stage_key():
