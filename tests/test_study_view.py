@@ -70,12 +70,13 @@ def test_choices_are_the_number_parameters_with_their_labels():
 
 
 def test_choosing_a_parameter_sets_its_softbounds_as_the_range(view):
-    """Range slider of a chosen parameter: its softbounds and its label; the second parameter's
-    inputs appear only when one is chosen."""
+    """Range slider of a chosen parameter: its softbounds and its label, in its display unit
+    (MPa for the soil modulus); the second parameter's inputs appear only when one is chosen."""
     _choose(view, view.first, "soil.youngs_modulus")
     low, high = Scenario.param["soil"].class_.param["youngs_modulus"].softbounds
-    assert view.first_range.value == (low, high)
-    assert (view.first_range.start, view.first_range.end) == (low, high)
+    assert view.first_range.value == (low / 1e6, high / 1e6)
+    assert (view.first_range.start, view.first_range.end) == (low / 1e6, high / 1e6)
+    assert view.first_range.label == "Soil Young's modulus (MPa)"
     assert not view.second_range.visible
     _choose(view, view.second, "train.speed_kmh")
     assert view.second_range.visible and view.second_range.value == (20.0, 160.0)
@@ -88,6 +89,45 @@ def test_grid_values_are_even_and_whole_for_integers():
     assert grid_values("train.speed_kmh", 40.0, 80.0, 5) == [40.0, 50.0, 60.0, 70.0, 80.0]
     assert grid_values("irregularity.track_class", 1, 6, 11) == [1, 2, 3, 4, 5, 6]
     assert grid_values("train.speed_kmh", 40.0, 80.0, 1) == [40.0]
+
+
+def test_a_range_in_display_units_gives_si_grid_values(view):
+    """Soil E from 4.1 to 6.1 MPa on the slider → 4.1e6 … 6.1e6 Pa in the study, exactly (no
+    conversion noise), and a slider end a drag left at 55.99999999999999 counts as 56."""
+    _choose(view, view.first, "soil.youngs_modulus")
+    view.first_range.value = (4.1, 6.1)
+    view.first_points.value = 3
+    assert view.vary() == {"soil.youngs_modulus": [4.1e6, 5.1e6, 6.1e6]}
+    view.first_range.value = (20.0, 55.99999999999999)
+    view.first_points.value = 2
+    assert view.vary() == {"soil.youngs_modulus": [20e6, 56e6]}
+    _choose(view, view.first, "irregularity.track_class")
+    view.first_range.value = (1.0, 3.0)
+    view.first_points.value = 3
+    assert view.vary() == {"irregularity.track_class": [1, 2, 3]}
+    assert all(isinstance(v, int) for v in view.vary()["irregularity.track_class"])
+
+
+def test_plot_axes_carry_the_display_unit():
+    """The band plot's and the heat map's parameter axes are in the display unit, labelled
+    with it (MPa for the soil modulus, km/h for the speed), and so is the hover."""
+    table = pd.DataFrame(
+        {
+            "soil.youngs_modulus": [4.1e6, 4.1e6, 6.1e6, 6.1e6],
+            "train.speed_kmh": [60.0, 80.0, 60.0, 80.0],
+            "seed": [1, 1, 1, 1],
+            "peak_disp_invert_m": [1e-3, 2e-3, 3e-3, 4e-3],
+        }
+    )
+    one = table[table["train.speed_kmh"] == 60.0].drop(columns="train.speed_kmh")
+    area, curve = band_plot(aggregate(one), "soil.youngs_modulus", "peak_disp_invert_m").values()
+    for element in (area, curve):
+        assert element.kdims[0].pprint_label == "Soil Young's modulus (MPa)"
+        assert list(element.dimension_values(0)) == [4.1, 6.1]
+    bands = aggregate(table)
+    heat = heat_map(bands, "soil.youngs_modulus", "train.speed_kmh", "peak_disp_invert_m")
+    assert [d.pprint_label for d in heat.kdims] == ["Soil Young's modulus (MPa)", "Speed (km/h)"]
+    assert sorted(set(heat.dimension_values("x"))) == [4.1, 6.1]
 
 
 def test_one_parameter_study_draws_mean_and_band(view):
@@ -120,13 +160,14 @@ def test_two_parameter_study_draws_a_heat_map(view):
     view.first_range.value = (90.0, 100.0)
     view.first_points.value = 2
     _choose(view, view.second, "soil.youngs_modulus")
-    view.second_range.value = (5e6, 1e7)
+    view.second_range.value = (5.0, 10.0)
     view.second_points.value = 2
     view.seeds.value = 1
     view.start()
     heat = view.plots.objects[0].object[()]
     assert isinstance(heat, hv.HeatMap)
     assert len(heat) == 4
+    assert sorted(set(view.table["soil.youngs_modulus"])) == [5e6, 1e7]
     bands = aggregate(view.table)
     np.testing.assert_array_equal(
         np.sort(heat.dimension_values("mean")), np.sort(bands["peak_disp_invert_m_mean"] * 1e3)
