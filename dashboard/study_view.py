@@ -3,17 +3,19 @@
 A self-contained Panel component, :class:`StudyView`, given a callable that returns the current
 :class:`~model.params.Scenario` (the dashboard's): choose up to two parameters (labels and
 ranges from :mod:`model.params`, in the parameter's display unit: MPa, MN/m, …; the study
-itself gets SI values), their ranges and points, the number of seeds; start, watch
-the progress, cancel. Results: the mean with its 5–95 % band across seeds against one parameter,
-or a heat map of the mean over two, for the peak displacement at the invert and the long-term
+itself gets SI values), their ranges and points, the number of seeds; start, watch the
+progress, cancel. Results: the mean with its 5–95 % band across seeds against one parameter, or
+a heat map of the mean over two, for the peak displacement at the invert and the long-term
 settlement (when the pipeline reports ``longterm_settlement_m``), and the envelope of the
-peak-displacement depth profiles. The study runs in its own thread on its own Dask cluster
-(:func:`model.study.run_study`), so the served app stays responsive; the page is updated on the
-session's event loop (``add_next_tick_callback``).
+peak-displacement depth profiles; once a study has rows, its report
+(:func:`dashboard.export.study_report_html`) can be downloaded. The study runs in its own
+thread on its own Dask cluster (:func:`model.study.run_study`), so the served app stays
+responsive; the page is updated on the session's event loop (``add_next_tick_callback``).
 """
 
 from __future__ import annotations
 
+import io
 import threading
 import time
 from collections.abc import Callable
@@ -230,6 +232,14 @@ class StudyView(pn.viewable.Viewer):
         self.cancel_button = pn.widgets.Button(label="Cancel", color="warning", disabled=True)
         self.progress = pn.indicators.Progress(value=0, max=1, sizing_mode="stretch_width")
         self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.report_button = pn.widgets.FileDownload(
+            callback=self._report_file,
+            filename="study_report.html",
+            label="Download study report",
+            disabled=True,
+            sizing_mode="stretch_width",
+            css_classes=["study-report"],
+        )
         self.plots = pn.Column(sizing_mode="stretch_width")
         self.first.param.watch(partial(self._on_parameter, self.first_range), "value")
         self.second.param.watch(self._on_second, "value")
@@ -258,6 +268,7 @@ class StudyView(pn.viewable.Viewer):
             pn.Row(self.start_button, self.cancel_button),
             self.progress,
             self.status,
+            self.report_button,
             width=340,
         )
         return pn.Row(controls, self.plots, sizing_mode="stretch_width")
@@ -328,6 +339,7 @@ class StudyView(pn.viewable.Viewer):
         self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
         self.running = True
         self.start_button.disabled, self.cancel_button.disabled = True, False
+        self.report_button.disabled = True
         if self._doc is None and pn.state.curdoc is not None and pn.state.curdoc.session_context:
             # a closed browser tab stops its study instead of leaving it to run to the end
             pn.state.curdoc.on_session_destroyed(lambda context: self._cancel.set())
@@ -422,6 +434,12 @@ class StudyView(pn.viewable.Viewer):
             for draw in slots.values()
         ]
 
+    def _report_file(self) -> io.BytesIO:
+        """The last study's HTML report (built when the button is pressed, not on every row)."""
+        from dashboard.export import study_report_html  # export imports this module's plots
+
+        return io.BytesIO(study_report_html(self.table).encode("utf-8"))
+
     def _finish(self, outcome: pd.DataFrame | Exception) -> None:
         """The study ended, finished, cancelled or refused: final table and state."""
         self.running = False
@@ -430,7 +448,8 @@ class StudyView(pn.viewable.Viewer):
             message = " ".join(str(outcome).split()) or type(outcome).__name__
             self.status.object = f"**Study failed:** {message}"
             return
-        self.table = outcome.reset_index(drop=True)
+        self.table = outcome.reset_index(drop=True)  # keeps attrs: the report's definition
+        self.report_button.disabled = outcome.empty
         self.progress.value = len(outcome)
         failed = int((outcome["error"] != "").sum()) if "error" in outcome else 0
         state = "Cancelled" if outcome.attrs.get("cancelled") else "Done"
