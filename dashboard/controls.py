@@ -31,7 +31,7 @@ Report = Callable[[str, "str | None"], None]
 """``report(path, message)``: a refused edit's message, or None once the parameter accepted one."""
 
 
-def _clean(value: float) -> float:
+def clean_number(value: float) -> float:
     """``value`` rounded to :data:`SIGNIFICANT_DIGITS` (removes binary noise of conversions)."""
     return float(f"{value:.{SIGNIFICANT_DIGITS}g}")
 
@@ -39,6 +39,11 @@ def _clean(value: float) -> float:
 def slider_step(low: float, high: float) -> float:
     """A round step giving at least :data:`SLIDER_POSITIONS` positions from ``low`` to ``high``."""
     return 10.0 ** math.floor(math.log10((high - low) / SLIDER_POSITIONS))
+
+
+def step_decimals(step: float) -> int:
+    """Decimal places of a slider step (0.1 → 1; 1 and above → 0)."""
+    return max(0, -round(math.log10(step)))
 
 
 def format_value(value, parameter: param.Parameter) -> str:
@@ -118,18 +123,14 @@ class ParameterControl(pn.viewable.Viewer):
         si = getattr(self.owner, self.name_in_owner)
         if si is None or self.factor == 1.0 or not isinstance(si, float | int):
             return si
-        return _clean(si * self.factor)
-
-    def _decimals(self) -> int:
-        """Decimal places of the slider step."""
-        return max(0, -round(math.log10(self.slider.step)))
+        return clean_number(si * self.factor)
 
     def _make_slider(self, value) -> pn.widgets.Widget:
         """Slider over the soft bounds (widened to the current value), in display units."""
         integer = isinstance(self.parameter, param.Integer)
         low, high = self.parameter.softbounds
         if not integer:
-            low, high = _clean(low * self.factor), _clean(high * self.factor)
+            low, high = clean_number(low * self.factor), clean_number(high * self.factor)
         cls = pn.widgets.IntSlider if integer else pn.widgets.FloatSlider
         step = 1 if integer else slider_step(low, high)
         return cls(
@@ -167,7 +168,7 @@ class ParameterControl(pn.viewable.Viewer):
             return
         value = event.new
         if not isinstance(self.parameter, param.Integer):
-            value = round(value, self._decimals())  # 56, not 55.99999999999999
+            value = round(value, step_decimals(self.slider.step))  # 56, not 55.99999999999999
         self._set(value, typed=format_value(value, self.parameter))
 
     def _on_choice(self, event: param.parameterized.Event) -> None:
@@ -197,7 +198,7 @@ class ParameterControl(pn.viewable.Viewer):
         # A slider may send a whole number as an int: it is still in display units.
         numeric = isinstance(value, int | float) and not isinstance(value, bool)
         if numeric and self.factor != 1.0:
-            si = _clean(value / self.factor)
+            si = clean_number(value / self.factor)
         self._report(self.path, None)  # before the update: the run it starts may report
         try:
             self.owner.param.update({self.name_in_owner: si})

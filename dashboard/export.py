@@ -1,11 +1,13 @@
 """Static, self-contained HTML report of one run: the dashboard's plots, summary and scenario;
-or of a what-if session: the plots with the pinned runs overlaid and the comparison table.
+of a what-if session: the plots with the pinned runs overlaid and the comparison table; or of a
+study: its definition, plots and the band of every grid point.
 
 All JavaScript and CSS are inlined, so the file opens offline. Command line::
 
     python -m dashboard.export --preset paper --out report.html
     python -m dashboard.export --scenario scenario.json --set train.speed_kmh=60 --out report.html
     python -m dashboard.export --session whatif_session.json --out report.html
+    python -m dashboard.export --study study/ --out report.html
 """
 
 from __future__ import annotations
@@ -29,10 +31,13 @@ from panel.io.state import set_curdoc
 
 from dashboard import plots
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
+from dashboard.study_view import RESULTS, display_values, study_plots
 from dashboard.whatif import CURRENT_LABEL, WhatIfSession, load_session
 from model.__main__ import add_scenario_arguments, load_scenario
+from model.params import display_label
 from model.pipeline import Results, SimulationError, StageCache, run
 from model.scenarios import CUSTOM, matching_preset
+from model.study import Study, aggregate, input_columns, read_study
 
 REPORT_TITLE = "tunnelsettle report"
 # Panel's page template links its favicons from a CDN; empty values keep the file offline.
@@ -243,11 +248,139 @@ def write_session_report(text: str, path: Path) -> Path:
     return path
 
 
+STUDY_BANDS_CSS = "table.study-bands td:last-child { text-align: right; min-width: 0; }"
+"""The band table is all numbers: no wide text column at its end (see :data:`COMPARISON_CSS`)."""
+
+
+def study_band_table(table: pd.DataFrame) -> pd.DataFrame:
+    """Mean and 5–95 % band across seeds at every point of a study, for the displacement results
+    (mm), the varied parameters in their display units.
+
+    Columns are (heading, statistic) pairs: each varied parameter's label, "Runs" (runs that
+    succeeded), then mean, 5 % and 95 % of each result the table has.
+    """
+    bands = aggregate(table)
+    deepest = table["deepest_depth_m"].dropna().unique() if "deepest_depth_m" in table else []
+    results = {
+        "peak_disp_invert_m": RESULTS["peak_disp_invert_m"],
+        "peak_disp_11m_m": "Peak displacement 11 m below the invert",
+        "peak_disp_deepest_m": f"Peak displacement {deepest[0]:g} m below the invert"
+        if len(deepest) == 1
+        else "Peak displacement at the deepest depth",
+        "longterm_settlement_m": RESULTS["longterm_settlement_m"],
+    }
+    columns = {
+        (display_label(path), ""): display_values(path, bands[path])
+        for path in input_columns(table)
+    }
+    columns["Runs", ""] = bands["n_runs"].to_numpy()
+    for key, label in results.items():
+        if f"{key}_mean" in bands:
+            for stat, heading in (("mean", "mean"), ("p05", "5 %"), ("p95", "95 %")):
+                columns[f"{label} (mm)", heading] = bands[f"{key}_{stat}"].to_numpy() * plots.MM
+    return pd.DataFrame(columns)
+
+
+def study_band_html(table: pd.DataFrame) -> str:
+    """HTML of :func:`study_band_table`: inputs to six significant digits, results (mm) to four,
+    "–" where no run succeeded."""
+    n_inputs = len(input_columns(table))
+    bands = study_band_table(table)
+    formats = [f"{{:.{6 if i < n_inputs else 4}g}}".format for i in range(bands.shape[1])]
+    formats[n_inputs] = str  # runs
+    return bands.to_html(
+        formatters=formats,
+        na_rep="–",
+        classes="comparison study-bands",
+        border=0,
+        index=False,
+    )
+
+
+def _seeds_text(seeds: list[int]) -> str:
+    """Seeds as text: a run of consecutive ones as "2024–2043 (20 seeds)", others listed."""
+    if len(seeds) > 2 and seeds == list(range(seeds[0], seeds[0] + len(seeds))):
+        return f"{seeds[0]}–{seeds[-1]} ({len(seeds)} seeds)"
+    return ", ".join(str(seed) for seed in seeds)
+
+
+def study_definition_html(table: pd.DataFrame) -> str:
+    """HTML list of what a study varied (display units), its seeds and how its runs ended."""
+    study = Study.from_json(table.attrs["study"])
+    if study.sampling == "grid":
+        how = "every combination of the values below"
+    else:
+        kind = "Latin hypercube" if study.sampling == "lhs" else "uniform random"
+        how = f"{study.n_samples} points, {kind} within the ranges below (sampling seed "
+        how += f"{study.sampling_seed})"
+    varied = "".join(
+        f"<li>{html.escape(display_label(path))}: "
+        + (" – " if study.sampling != "grid" else ", ").join(
+            f"{value:.6g}" for value in display_values(path, spec)
+        )
+        + "</li>"
+        for path, spec in study.vary.items()
+    )
+    failed = int((table["error"] != "").sum()) if "error" in table else 0
+    not_run = study.n_runs - len(table)
+    return (
+        f"<h3>Study</h3><p>Points: {html.escape(how)}.</p><ul>{varied or '<li>nothing varied</li>'}"
+        f"</ul><p>Irregularity seeds: {_seeds_text(study.seeds)}.</p>"
+        f'<p class="study-runs">Runs: {study.n_runs} in the study; {len(table) - failed} finished,'
+        f" {failed} failed, {not_run} cancelled"
+        + (" (the study was cancelled)" if table.attrs.get("cancelled") else "")
+        + ".</p>"
+    )
+
+
+def build_study_report(table: pd.DataFrame, name: str | None = None) -> pn.Column:
+    """Panel layout of a study's report: header, definition, plots, band table, base scenario.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A study's rows with their ``attrs`` (:func:`model.study.run_study`,
+        :func:`model.study.read_study`).
+    name : str, optional
+        Name of the base scenario in the header; default its preset's name, or "custom".
+    """
+    study = Study.from_json(table.attrs["study"])
+    header = pn.pane.HTML(
+        f"<h1>{REPORT_TITLE}: study</h1>"
+        + report_header(name or matching_preset(study.base))
+        + "<p>The base scenario run over the varied inputs times the irregularity seeds; per "
+        "point, the mean and the 5–95 % band across the seeds. Displacements are positive "
+        "downward.</p>" + study_definition_html(table),
+        sizing_mode="stretch_width",
+    )
+    figures = pn.GridBox(
+        *[pn.pane.HoloViews(plot, sizing_mode="stretch_width") for plot in study_plots(table)],
+        ncols=2,
+        sizing_mode="stretch_width",
+    )
+    bands = pn.pane.HTML(
+        "<h3>Mean and 5–95 % band per point</h3>" + study_band_html(table),
+        stylesheets=[COMPARISON_CSS, STUDY_BANDS_CSS],
+        sizing_mode="stretch_width",
+    )
+    scenario_block = pn.pane.HTML(
+        "<h3>Base scenario</h3><details><summary>All inputs (JSON, SI units except km/h)"
+        f'</summary><pre class="scenario-json">{html.escape(study.base_json)}</pre></details>',
+        sizing_mode="stretch_width",
+    )
+    return pn.Column(header, figures, bands, scenario_block, sizing_mode="stretch_width")
+
+
+def study_report_html(table: pd.DataFrame, name: str | None = None) -> str:
+    """The report of a study as one self-contained HTML document."""
+    return standalone_html(lambda: build_study_report(table, name))
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``python -m dashboard.export``."""
     parser = argparse.ArgumentParser(
         prog="python -m dashboard.export",
-        description="Run a scenario and write a self-contained HTML report.",
+        description="Write a self-contained HTML report of a run, a what-if session or a study.",
     )
     add_scenario_arguments(parser)
     parser.add_argument(
@@ -255,6 +388,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         help="what-if session file saved by the dashboard: report its runs side by side "
         "(instead of --scenario and --set)",
+    )
+    parser.add_argument(
+        "--study",
+        type=Path,
+        help="study folder written by python -m model study --out: report its definition, "
+        "plots and bands (instead of --scenario, --set and --session)",
     )
     parser.add_argument("--out", type=Path, required=True, help="HTML file to write")
     return parser
@@ -264,6 +403,8 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the process exit code (2 for bad input)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.study is not None:
+        return _study_main(parser, args)
     if args.session is not None:
         return _session_main(parser, args)
     try:
@@ -291,6 +432,22 @@ def _session_main(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
     except (ValueError, OSError, SimulationError) as error:
         parser.exit(2, f"error: {error}\n")
     print(f"session report written to {args.out}")
+    return 0
+
+
+def _study_main(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``--study``: the report of a saved study folder."""
+    if args.scenario is not None or args.overrides or args.session is not None:
+        parser.error("--study cannot be combined with --scenario, --set or --session")
+    try:
+        table = read_study(args.study)
+        name = matching_preset(Study.from_json(table.attrs["study"]).base)
+        if name == CUSTOM:
+            name = args.study.resolve().name
+        args.out.write_text(study_report_html(table, name), encoding="utf-8")
+    except (ValueError, OSError) as error:
+        parser.exit(2, f"error: {error}\n")
+    print(f"study report written to {args.out}")
     return 0
 
 

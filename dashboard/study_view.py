@@ -2,17 +2,20 @@
 
 A self-contained Panel component, :class:`StudyView`, given a callable that returns the current
 :class:`~model.params.Scenario` (the dashboard's): choose up to two parameters (labels and
-ranges from :mod:`model.params`), their ranges and points, the number of seeds; start, watch
-the progress, cancel. Results: the mean with its 5–95 % band across seeds against one parameter,
-or a heat map of the mean over two, for the peak displacement at the invert and the long-term
+ranges from :mod:`model.params`, in the parameter's display unit: MPa, MN/m, …; the study
+itself gets SI values), their ranges and points, the number of seeds; start, watch the
+progress, cancel. Results: the mean with its 5–95 % band across seeds against one parameter, or
+a heat map of the mean over two, for the peak displacement at the invert and the long-term
 settlement (when the pipeline reports ``longterm_settlement_m``), and the envelope of the
-peak-displacement depth profiles. The study runs in its own thread on its own Dask cluster
-(:func:`model.study.run_study`), so the served app stays responsive; the page is updated on the
-session's event loop (``add_next_tick_callback``).
+peak-displacement depth profiles; once a study has rows, its report
+(:func:`dashboard.export.study_report_html`) can be downloaded. The study runs in its own
+thread on its own Dask cluster (:func:`model.study.run_study`), so the served app stays
+responsive; the page is updated on the session's event loop (``add_next_tick_callback``).
 """
 
 from __future__ import annotations
 
+import io
 import threading
 import time
 from collections.abc import Callable
@@ -26,8 +29,9 @@ import param
 from bokeh.models import PrintfTickFormatter
 from holoviews.streams import Pipe
 
+from dashboard.controls import clean_number, slider_step, step_decimals
 from dashboard.plots import MM, PLOT_OPTIONS
-from model.params import SECTIONS, Scenario
+from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.study import MAX_RUNS_UNCONFIRMED, aggregate, profile_depths, run_study
 
 NONE = "(none)"
@@ -44,7 +48,8 @@ MAX_SEEDS = 200
 
 
 def study_parameters() -> dict[str, str]:
-    """Label → dotted path of every number parameter with a slider range (softbounds)."""
+    """Label (in display units) → dotted path of every number parameter with a slider range
+    (softbounds)."""
     choices = {}
     for section in SECTIONS:
         cls = Scenario.param[section].class_
@@ -56,32 +61,35 @@ def study_parameters() -> dict[str, str]:
                 and p.softbounds is not None
                 and path not in EXCLUDED
             ):
-                choices[f"{p.label} — {path}"] = path
+                choices[f"{display_label(path)} — {path}"] = path
     return choices
 
 
 def grid_values(path: str, low: float, high: float, n_points: int) -> list[float | int]:
-    """``n_points`` evenly spaced values from ``low`` to ``high`` (distinct whole numbers for an
-    integer parameter)."""
-    values = np.linspace(low, high, n_points) if n_points > 1 else np.array([low])
-    section, _, name = path.partition(".")
-    if isinstance(Scenario.param[section].class_.param[name], param.Integer):
+    """``n_points`` evenly spaced values from ``low`` to ``high``, given in the parameter's
+    display unit, returned in SI (distinct whole numbers for an integer parameter)."""
+    _, factor = display_unit(path)
+    shown = np.linspace(low, high, n_points) if n_points > 1 else np.array([low])
+    values = [clean_number(v / factor) for v in shown]
+    if isinstance(parameter_of(path), param.Integer):
         return sorted({round(v) for v in values})
-    return [float(v) for v in values]
+    return values
 
 
-def _label(path: str) -> str:
-    section, _, name = path.partition(".")
-    return Scenario.param[section].class_.param[name].label
+def display_values(path: str, values) -> np.ndarray:
+    """SI values of parameter ``path`` in its display unit (conversion noise rounded off)."""
+    _, factor = display_unit(path)
+    return np.array([clean_number(v * factor) for v in np.asarray(values, float)])
 
 
 def _dimension(path: str) -> hv.Dimension:
-    return hv.Dimension(path.replace(".", "_"), label=_label(path))
+    return hv.Dimension(path.replace(".", "_"), label=display_label(path))
 
 
 def band_plot(bands: pd.DataFrame, path: str, key: str) -> hv.Overlay:
-    """Mean (line) and 5–95 % band across seeds of ``key`` (m → mm) against one parameter."""
-    x = bands[path].to_numpy(float)
+    """Mean (line) and 5–95 % band across seeds of ``key`` (m → mm) against one parameter (in
+    its display unit)."""
+    x = display_values(path, bands[path])
     order = np.argsort(x)
     x = x[order]
     mean, low, high = (bands[f"{key}_{s}"].to_numpy()[order] * MM for s in ("mean", "p05", "p95"))
@@ -94,19 +102,20 @@ def band_plot(bands: pd.DataFrame, path: str, key: str) -> hv.Overlay:
 
 
 def heat_map(bands: pd.DataFrame, path_x: str, path_y: str, key: str) -> hv.HeatMap:
-    """Mean across seeds of ``key`` (m → mm) over two parameters; the band in the hover."""
+    """Mean across seeds of ``key`` (m → mm) over two parameters (in their display units); the
+    band in the hover."""
     data = pd.DataFrame(
         {
-            "x": bands[path_x].astype(float),
-            "y": bands[path_y].astype(float),
-            "mean": bands[f"{key}_mean"] * MM,
-            "p05": bands[f"{key}_p05"] * MM,
-            "p95": bands[f"{key}_p95"] * MM,
+            "x": display_values(path_x, bands[path_x]),
+            "y": display_values(path_y, bands[path_y]),
+            "mean": bands[f"{key}_mean"].to_numpy() * MM,
+            "p05": bands[f"{key}_p05"].to_numpy() * MM,
+            "p95": bands[f"{key}_p95"].to_numpy() * MM,
         }
     )
     kdims = [
-        hv.Dimension("x", label=_label(path_x)),
-        hv.Dimension("y", label=_label(path_y)),
+        hv.Dimension("x", label=display_label(path_x)),
+        hv.Dimension("y", label=display_label(path_y)),
     ]
     vdims = [
         hv.Dimension("mean", label=f"{RESULTS[key]} (mean)", unit="mm"),
@@ -223,6 +232,14 @@ class StudyView(pn.viewable.Viewer):
         self.cancel_button = pn.widgets.Button(label="Cancel", color="warning", disabled=True)
         self.progress = pn.indicators.Progress(value=0, max=1, sizing_mode="stretch_width")
         self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.report_button = pn.widgets.FileDownload(
+            callback=self._report_file,
+            filename="study_report.html",
+            label="Download study report",
+            disabled=True,
+            sizing_mode="stretch_width",
+            css_classes=["study-report"],
+        )
         self.plots = pn.Column(sizing_mode="stretch_width")
         self.first.param.watch(partial(self._on_parameter, self.first_range), "value")
         self.second.param.watch(self._on_second, "value")
@@ -251,28 +268,28 @@ class StudyView(pn.viewable.Viewer):
             pn.Row(self.start_button, self.cancel_button),
             self.progress,
             self.status,
+            self.report_button,
             width=340,
         )
         return pn.Row(controls, self.plots, sizing_mode="stretch_width")
 
     # ---- inputs ---------------------------------------------------------------------------
     def _on_parameter(self, slider: pn.widgets.EditableRangeSlider, event) -> None:
-        """A parameter was chosen: its softbounds become the range, its label the name."""
+        """A parameter was chosen: its softbounds become the range and its label the name, both
+        in its display unit."""
         select = self.first if slider is self.first_range else self.second
         if select.value == NONE:
             return
         path = self.choices[select.value]
-        section, _, name = path.partition(".")
-        p = Scenario.param[section].class_.param[name]
-        low, high = p.softbounds
-        step = 1 if isinstance(p, param.Integer) else 10.0 ** np.floor(np.log10((high - low) / 100))
+        low, high = display_values(path, parameter_of(path).softbounds)
+        step = 1 if isinstance(parameter_of(path), param.Integer) else slider_step(low, high)
         slider.param.update(
-            label=p.label,
+            label=display_label(path),
             start=low,
             end=high,
             value=(low, high),
             step=step,
-            format=PrintfTickFormatter(format="%.4g"),  # 1e+06, not a cut-off 1000000.0
+            format=PrintfTickFormatter(format=f"%.{step_decimals(step)}f"),
         )
 
     def _on_second(self, event) -> None:
@@ -282,7 +299,8 @@ class StudyView(pn.viewable.Viewer):
             self._on_parameter(self.second_range, event)
 
     def vary(self) -> dict[str, list]:
-        """Grid of the chosen parameters: path → values."""
+        """Grid of the chosen parameters: path → SI values (the range's ends rounded to the
+        slider's step: 56, not 55.99999999999999)."""
         vary = {}
         pairs = [(self.first, self.first_range, self.first_points)]
         if self.second.value != NONE:
@@ -291,7 +309,8 @@ class StudyView(pn.viewable.Viewer):
             path = self.choices[select.value]
             if path in vary:
                 raise ValueError(f"{path} is chosen twice: pick two different parameters")
-            vary[path] = grid_values(path, *slider.value, points.value)
+            low, high = (round(end, step_decimals(slider.step)) for end in slider.value)
+            vary[path] = grid_values(path, low, high, points.value)
         return vary
 
     # ---- running --------------------------------------------------------------------------
@@ -320,6 +339,7 @@ class StudyView(pn.viewable.Viewer):
         self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
         self.running = True
         self.start_button.disabled, self.cancel_button.disabled = True, False
+        self.report_button.disabled = True
         if self._doc is None and pn.state.curdoc is not None and pn.state.curdoc.session_context:
             # a closed browser tab stops its study instead of leaving it to run to the end
             pn.state.curdoc.on_session_destroyed(lambda context: self._cancel.set())
@@ -414,6 +434,12 @@ class StudyView(pn.viewable.Viewer):
             for draw in slots.values()
         ]
 
+    def _report_file(self) -> io.BytesIO:
+        """The last study's HTML report (built when the button is pressed, not on every row)."""
+        from dashboard.export import study_report_html  # export imports this module's plots
+
+        return io.BytesIO(study_report_html(self.table).encode("utf-8"))
+
     def _finish(self, outcome: pd.DataFrame | Exception) -> None:
         """The study ended, finished, cancelled or refused: final table and state."""
         self.running = False
@@ -422,7 +448,8 @@ class StudyView(pn.viewable.Viewer):
             message = " ".join(str(outcome).split()) or type(outcome).__name__
             self.status.object = f"**Study failed:** {message}"
             return
-        self.table = outcome.reset_index(drop=True)
+        self.table = outcome.reset_index(drop=True)  # keeps attrs: the report's definition
+        self.report_button.disabled = outcome.empty
         self.progress.value = len(outcome)
         failed = int((outcome["error"] != "").sum()) if "error" in outcome else 0
         state = "Cancelled" if outcome.attrs.get("cancelled") else "Done"

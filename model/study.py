@@ -660,6 +660,44 @@ def load_study(path: Path) -> Study:
     return Study.from_json(Path(path).read_text(encoding="utf-8"))
 
 
+def read_study(folder: Path) -> pd.DataFrame:
+    """The table of a study folder written by :func:`save_study`, as :func:`run_study` gave it.
+
+    Parameters
+    ----------
+    folder : path
+        Holds ``runs.csv`` and ``study.json``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows of ``runs.csv`` (the same numbers bit for bit), ``attrs`` ``study``,
+        ``n_runs`` and ``cancelled`` (True when the folder holds fewer rows than the study has
+        runs).
+
+    Raises
+    ------
+    ValueError
+        A file is missing, or ``study.json`` is not a study definition (one line).
+    """
+    folder = Path(folder)
+    runs, definition = folder / "runs.csv", folder / "study.json"
+    for path in (runs, definition):
+        if not path.is_file():
+            raise ValueError(
+                f"{path} not found: {folder} is not a folder written by save_study or "
+                "python -m model study --out"
+            )
+    study = load_study(definition)
+    table = pd.read_csv(runs, index_col="run")
+    if "error" in table:
+        table["error"] = table["error"].fillna("")
+    table.attrs.update(
+        study=study.to_json(), n_runs=study.n_runs, cancelled=len(table) < study.n_runs
+    )
+    return table
+
+
 # ---- command line --------------------------------------------------------------------------
 def parse_values(spec: str) -> list[str] | tuple[str, str] | None:
     """Grid text of ``--vary``: ``a,b,c`` → values; ``start:stop:step`` → the inclusive range;

@@ -114,7 +114,7 @@ def test_study_streams_stays_responsive_and_cancels(tmp_path):
             )
 
             page.locator("select").nth(1).select_option(
-                label="Soil Young's modulus (Pa) — soil.youngs_modulus"
+                label="Soil Young's modulus (MPa) — soil.youngs_modulus"
             )
             page.locator(".study-range-second").wait_for(state="visible", timeout=RUN_WAIT_MS)
             assert page.get_by_text("runs done").is_visible()  # answered while the study ran

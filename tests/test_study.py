@@ -34,6 +34,7 @@ from model.study import (
     main,
     parse_values,
     profile_depths,
+    read_study,
     run_study,
     save_study,
     study_client,
@@ -150,9 +151,10 @@ def test_rows_equal_in_process_runs_bit_for_bit(cheap_scenario, tmp_path):
         for key, expected in summary.items():
             assert values[key].item() == expected, key
         np.testing.assert_array_equal(values[depths].to_numpy()[0], profile)
-    paths = save_study(table, tmp_path)
-    back = pd.read_csv(paths[0], index_col="run")
+    save_study(table, tmp_path)
+    back = read_study(tmp_path)
     pd.testing.assert_frame_equal(back, table, check_exact=True)
+    assert back.attrs == table.attrs
 
 
 def test_rerun_from_saved_definition_gives_the_same_table(client, cheap_scenario, tmp_path):
@@ -300,6 +302,34 @@ def test_definition_json_round_trip(cheap_scenario):
     assert again.seeds == [1, 5]
     assert again.base_json == study.base_json
     assert [inputs for inputs, _ in again.runs()] == [inputs for inputs, _ in study.runs()]
+
+
+def test_read_study_gives_back_failed_and_cancelled_runs(cheap_scenario, tmp_path):
+    """A cancelled study with a failed run: read_study gives back its rows exactly (the error
+    message, empty for the runs that succeeded) and the attrs run_study set."""
+    study = define_study(cheap_scenario(), {"train.speed_kmh": [90.0, 100.0]}, seeds=[7, 8])
+    rows = {
+        0: {"train.speed_kmh": 90.0, "seed": 7, "peak_disp_invert_m": 0.1 + 0.2},
+        1: {"train.speed_kmh": 90.0, "seed": 8, "error": "SimulationError: unstable, at 3 s"},
+        3: {"train.speed_kmh": 100.0, "seed": 8, "peak_disp_invert_m": 1 / 3 * 1e-3},
+    }
+    table = study_module._table(study, rows, cancelled=True)
+    save_study(table, tmp_path)
+    back = read_study(tmp_path)
+    pd.testing.assert_frame_equal(back, table, check_exact=True)
+    assert back.attrs == table.attrs == {"study": study.to_json(), "n_runs": 4, "cancelled": True}
+
+
+@pytest.mark.parametrize("missing", ["runs.csv", "study.json"])
+def test_read_study_refuses_a_folder_without_its_files(cheap_scenario, tmp_path, missing):
+    study = define_study(cheap_scenario(), {"train.speed_kmh": [90.0]}, seeds=[7])
+    table = study_module._table(study, {0: {"train.speed_kmh": 90.0, "seed": 7}}, cancelled=False)
+    save_study(table, tmp_path)
+    (tmp_path / missing).unlink()
+    with pytest.raises(ValueError) as refused:
+        read_study(tmp_path)
+    message = str(refused.value)
+    assert "\n" not in message and str(tmp_path / missing) in message and "not found" in message
 
 
 def test_aggregate_mean_and_band():
