@@ -69,6 +69,7 @@ FE_RESULTS_DIR = Path(os.environ.get("TUNNELSETTLE_FE_RESULTS", "fe_results"))
 server's working directory unless absolute)."""
 
 OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
+DEPTH_PLOT = "depth_profile"  # the plot that also draws the other model's curve
 """The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
 
 STAGE_NAMES = {"vehicle_track": "vehicle–track", "longterm": "long-term settlement"}
@@ -170,6 +171,10 @@ class Dashboard(pn.viewable.Viewer):
         """A stored FE result of the current scenario (``python -m model fe``), if any."""
         self.render_counts = dict.fromkeys(STAGES, 0)
         self.runs = LatestRun(self._compute, executor)
+        self.companion_runs = LatestRun(self._compute_companion, executor)
+        """The other tunnel–soil model's run, computed after the results are on screen."""
+        self._companion_due = False
+        self._companion_json = ""
         self._shown_keys: dict[str, str] = {}
         self._progress_state = ("", 0.0)
         self._replacing = False
@@ -509,8 +514,12 @@ class Dashboard(pn.viewable.Viewer):
             asyncio.run(self._drain())
 
     async def _drain(self) -> None:
-        """Compute the requested runs, refreshing the progress bar meanwhile."""
+        """Compute the requested runs, refreshing the progress bar meanwhile, then the other
+        tunnel–soil model's run for the depth plot."""
         await self.runs.drain(self._start, self._finish, tick=self._show_progress)
+        if self._companion_due:
+            self._companion_due = False
+            await self.companion_runs.drain(lambda scenario: None, self._finish_companion)
 
     def _start(self, scenario: Scenario) -> None:
         """Mark the plots that this run will change as loading."""
@@ -542,33 +551,58 @@ class Dashboard(pn.viewable.Viewer):
                 f'<span class="computing">Computing {_stage_name(stage)}… {fraction:.0%}</span>'
             )
 
-    def _compute(self, scenario: Scenario) -> tuple[Results, Results | None, FEResult | None]:
-        """Run the pipeline with the app's cache (in a worker thread), then the same scenario
-        with the other tunnel–soil model (its vehicle–track and load stages come from the
-        cache; a failure of that comparison only leaves its curve out), and look up a stored
-        FE result of the scenario."""
+    def _compute(self, scenario: Scenario) -> tuple[Results, FEResult | None]:
+        """Run the pipeline with the app's cache (in a worker thread) and look up a stored FE
+        result of the scenario."""
         if self.warm is not None:
             self.warm.result()  # the kernels compile once, not once per waiting session
         results = run(scenario, progress=self._note_progress, cache=self.cache)
-        fe_result = stored_fe_result(scenario, FE_RESULTS_DIR)
-        other = scenario.copy()
-        other.tunnel.model = OTHER_MODEL[scenario.tunnel.model]
+        return results, stored_fe_result(scenario, FE_RESULTS_DIR)
+
+    def _compute_companion(self, other: Scenario) -> Results | None:
+        """The scenario with the other tunnel–soil model (in a worker thread; its vehicle–track
+        and load stages come from the cache). A failure only leaves its curve out."""
         try:
-            return results, run(other, cache=self.cache), fe_result
+            return run(other, cache=self.cache)
         except (ValueError, SimulationError):
-            return results, None, fe_result
+            return None
+
+    def _request_companion(self, results: Results) -> None:
+        """Ask for the other model's run of ``results``' scenario (unless it is on screen)."""
+        other = results.scenario
+        other.tunnel.model = OTHER_MODEL[other.tunnel.model]
+        self._companion_json = other.to_json()
+        shown = self.other_model
+        if shown is not None and shown.scenario_json == self._companion_json:
+            return
+        self.other_model = None  # the previous scenario's curve must not stay on the plot
+        if self.companion_runs.request(other):
+            self._companion_due = True
+
+    def _finish_companion(self, other: Scenario, outcome: Results | None | BaseException):
+        """Draw the other model's curve if it still belongs to the results on screen."""
+        if isinstance(outcome, BaseException):
+            log.error("comparison run failed", exc_info=outcome)
+            outcome = None
+        if outcome is None or outcome.scenario_json != self._companion_json:
+            return
+        self.other_model = outcome
+        stream = self.plot_streams.get(DEPTH_PLOT)
+        if stream is not None:
+            stream.send(self.results)
 
     def _finish(
         self,
         scenario: Scenario,
-        outcome: tuple[Results, Results | None, FEResult | None] | BaseException,
+        outcome: tuple[Results, FEResult | None] | BaseException,
     ) -> None:
         """Show a run's results (redrawing only the plots whose stage changed) or its error."""
         self.progress.param.update(visible=False, active=False)
         if isinstance(outcome, BaseException):
             self._show_failure(outcome)
             return
-        results, self.other_model, self.fe_result = outcome
+        results, self.fe_result = outcome
+        self._request_companion(results)
         redrawn = self._stale_stages(results.scenario)
         for spec in ALL_PLOTS:
             pane = self.plot_panes[spec.key]

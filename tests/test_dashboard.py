@@ -450,6 +450,32 @@ def test_depth_plot_draws_the_other_tunnel_model_faint(dashboard):
         )
 
 
+def test_the_other_model_is_computed_after_the_results_are_shown(dashboard, monkeypatch):
+    """The comparison run does not delay the chosen model's plots: it starts once they show
+    the new results, and its curve then follows the new inputs."""
+    compute = dashboard.companion_runs._compute
+    shown_when_called = []
+
+    def watching_compute(other):
+        shown_when_called.append(dashboard.results.scenario.soil.youngs_modulus)
+        assert dashboard.other_model is None  # the old scenario's curve is gone meanwhile
+        return compute(other)
+
+    monkeypatch.setattr(dashboard.companion_runs, "_compute", watching_compute)
+    dashboard.controls["soil.youngs_modulus"].enter("9")  # MPa
+    assert shown_when_called == [9e6]
+    assert dashboard.other_model.scenario.soil.youngs_modulus == 9e6
+    assert not dashboard.companion_runs.busy
+
+
+def test_a_comparison_run_of_older_inputs_is_not_drawn(dashboard):
+    """A comparison result that no longer matches the inputs on screen is dropped."""
+    shown = dashboard.other_model
+    stale = dashboard.results  # a Results of another scenario than the expected comparison
+    dashboard._finish_companion(stale.scenario, stale)
+    assert dashboard.other_model is shown
+
+
 def test_closing_a_session_drops_its_results(dashboard):
     dashboard.close()
     assert dashboard.results is None and not dashboard.plot_streams
