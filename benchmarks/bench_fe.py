@@ -3,8 +3,9 @@
 Run: ``python benchmarks/bench_fe.py [elastic|mohr_coulomb ...]`` (default: both). For each soil
 law it runs the pipeline once for the line load, then ``run_fe`` with one passage on the default
 mesh (R = 30 m, element size λ_min/6 from the load band, 20 steps per period of f_high), and
-prints the mesh, the wall time of each phase and the peak and permanent displacement at the
-invert and at 11 m, beside the analytical 2D model on the same load. Target: minutes, not hours.
+prints the mesh, the time steps and the mean iterations per step (1 for the elastic law: one
+solve), the wall time of each phase and the peak and permanent displacement at the invert and at
+11 m, beside the analytical 2D model on the same load. Target: minutes, not hours.
 Timings are wall-clock on a shared machine, with the process's CPU time beside them (the
 figure to compare between machines).
 """
@@ -47,7 +48,8 @@ def main(laws: list[str]) -> None:
             f"{mesh['n_theta']} × {mesh['n_rings']}, h = {mesh['element_size_m']:.2f} m, "
             f"R = {mesh['outer_radius_m']:.0f} m, band {mesh['band_hz'][0]:.2f}–"
             f"{mesh['band_hz'][1]:.2f} Hz, Δt = {mesh['dt_s'] * 1e3:.1f} ms × "
-            f"{mesh['steps_per_passage']} steps"
+            f"{mesh['steps_per_passage']} steps, {mesh['iterations_per_step']:.2f} iterations "
+            "per step"
         )
         phases = ", ".join(f"{name} {seconds:.1f} s" for name, seconds in fe.timings_s.items())
         print(f"  wall time {total:.0f} s ({phases}); CPU time {cpu:.0f} s")
