@@ -63,6 +63,11 @@ def warm_numba_caches() -> None:
     subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True)
 
 
+def note(text: str) -> None:
+    """Progress of the benchmark on stderr (a stuck wait shows where it is)."""
+    print(f"[{time.strftime('%H:%M:%S')}] {text}", file=sys.stderr, flush=True)
+
+
 def pipeline_seconds(page) -> float:
     """The last run's own time: the sum of its stage times, from the page's status line."""
     return sum(
@@ -122,20 +127,25 @@ def main(argv: list[str] | None = None) -> int:
         page = browser.new_page(viewport=VIEWPORT)
         page.goto(f"{url}?preset=paper")
         wait_for_plots(page, timeout_ms=600_000)
+        note("first page drawn")
         speed = []
         for i in range(args.repeat):
             seconds = timed_change(page, "train.speed_kmh", f"{70 + 2 * i}", STAGES)
             speed.append((seconds, pipeline_seconds(page)))
+            note(f"speed change {i + 1}: {seconds:.2f} s")
         soil = []
         for i in range(args.repeat):
             seconds = timed_change(page, "soil.youngs_modulus", f"{7 + i}", ("soil",))
             soil.append((seconds, pipeline_seconds(page)))
+            note(f"soil change {i + 1}: {seconds:.2f} s")
         page.close()
 
         one, pages = open_pages(browser, url, 1)
+        note(f"one page: {one:.2f} s")
         for p in pages:
             p.close()
         ten, pages = open_pages(browser, url, 10)
+        note(f"ten pages: {ten:.2f} s")
         for p in pages:
             p.close()
         # the stage cache is full by now (it holds the paper page's results): what remains to

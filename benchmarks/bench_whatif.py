@@ -151,7 +151,7 @@ def browser(repeat: int) -> None:
         page.evaluate(PAINTED_JS)
 
     cases = [
-        ("preset=paper", "soil.youngs_modulus", lambda i: f"{7e6 + 1e5 * i:g}", ("soil",)),
+        ("preset=paper", "soil.youngs_modulus", lambda i: f"{7 + 0.1 * i:g}", ("soil",)),  # MPa
         (
             "preset=single_bogie",
             "train.speed_kmh",

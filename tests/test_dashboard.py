@@ -212,7 +212,7 @@ def test_controls_take_unit_label_range_value_and_tooltip_from_the_params(dashbo
 
 def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
     for key, pane in dashboard.plot_panes.items():
-        assert pane.object is not None and not pane.loading, key
+        assert pane.object is not None and not dashboard.is_stale(key), key
         x, y = _pane_data(dashboard, key)
         assert x.size > 10 and np.all(np.isfinite(y)), key
     assert 'data-key="peak_disp_invert"' in dashboard.summary.object
@@ -265,13 +265,13 @@ def test_soil_change_in_display_units_redraws_only_the_soil_plots(dashboard):
     assert json.loads(dashboard._scenario_file().getvalue())["soil"]["youngs_modulus"] == 12e6
 
 
-def test_a_run_marks_only_the_plots_it_will_change_as_loading(dashboard):
+def test_a_run_marks_only_the_plots_it_will_change_as_stale(dashboard):
     scenario = dashboard.scenario.copy()
     scenario.soil.density = 1900.0
     dashboard._start(scenario)
     assert dashboard.progress.visible
     for spec in plots.PLOTS:
-        assert dashboard.plot_panes[spec.key].loading == (spec.stage == "soil"), spec.key
+        assert dashboard.is_stale(spec.key) == (spec.stage == "soil"), spec.key
     dashboard._note_progress("soil", 0.5)
     dashboard._show_progress()
     assert dashboard.progress.value == round(100 * 2.5 / len(STAGES))  # 2 stages done + 0.5
@@ -329,7 +329,7 @@ def test_inconsistent_inputs_are_reported_not_raised(dashboard):
     assert dashboard.error_alert.visible
     text = dashboard.error_alert.object.replace("\\", "")
     assert "Inconsistent inputs" in text and "wavelength_max" in text
-    assert all(not pane.loading for pane in dashboard.plot_panes.values())
+    assert not any(dashboard.is_stale(key) for key in dashboard.plot_panes)
 
 
 def test_optional_parameter_text_box_accepts_automatic(dashboard):
