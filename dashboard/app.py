@@ -74,6 +74,9 @@ PLOT_STYLES = {"flex": "1 1 440px"}
 # A plot that a run will redraw is dimmed, not covered by Panel's animated loading spinner: the
 # spinner's animation cost the browser more than the redraw itself (1.4 s of CPU per change).
 STALE_PLOT_STYLES = {**PLOT_STYLES, "opacity": "0.45"}
+# The other model's run waits this long after the results are shown, and is skipped if the
+# user has changed an input by then: the chosen model's plots come first.
+COMPANION_DELAY_S = 0.5
 """The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
 
 STAGE_NAMES = {"vehicle_track": "vehicle–track", "longterm": "long-term settlement"}
@@ -177,8 +180,9 @@ class Dashboard(pn.viewable.Viewer):
         self.runs = LatestRun(self._compute, executor)
         self.companion_runs = LatestRun(self._compute_companion, executor)
         """The other tunnel–soil model's run, computed after the results are on screen."""
-        self._companion_due = False
+        self._companion_wanted: Scenario | None = None
         self._companion_json = ""
+        self.companion_delay_s = COMPANION_DELAY_S if self.threaded else 0.0
         self._shown_keys: dict[str, str] = {}
         self._progress_state = ("", 0.0)
         self._replacing = False
@@ -522,11 +526,17 @@ class Dashboard(pn.viewable.Viewer):
             asyncio.run(self._drain())
 
     async def _drain(self) -> None:
-        """Compute the requested runs, refreshing the progress bar meanwhile, then the other
-        tunnel–soil model's run for the depth plot."""
+        """Compute the requested runs, refreshing the progress bar meanwhile, then (unless a
+        newer change is computing by then) the other tunnel–soil model's run for the depth
+        plot."""
         await self.runs.drain(self._start, self._finish, tick=self._show_progress)
-        if self._companion_due:
-            self._companion_due = False
+        if self._companion_wanted is None:
+            return
+        await asyncio.sleep(self.companion_delay_s)  # the page draws the results undisturbed
+        if self.runs.busy:  # a newer change: its own drain asks for its comparison
+            return
+        other, self._companion_wanted = self._companion_wanted, None
+        if other is not None and self.companion_runs.request(other):
             await self.companion_runs.drain(lambda scenario: None, self._finish_companion)
 
     def _start(self, scenario: Scenario) -> None:
@@ -598,8 +608,7 @@ class Dashboard(pn.viewable.Viewer):
         if shown is not None and shown.scenario_json == self._companion_json:
             return
         self.other_model = None  # the previous scenario's curve must not stay on the plot
-        if self.companion_runs.request(other):
-            self._companion_due = True
+        self._companion_wanted = other
 
     def _finish_companion(self, other: Scenario, outcome: Results | None | BaseException):
         """Draw the other model's curve if it still belongs to the results on screen."""
