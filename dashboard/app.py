@@ -182,6 +182,8 @@ class Dashboard(pn.viewable.Viewer):
         """The other tunnel–soil model's run, computed after the results are on screen."""
         self._companion_wanted: Scenario | None = None
         self._companion_json = ""
+        self.comparison_state = "computing"
+        """The other model's curve on the depth plot: "computing", "shown" or "unavailable"."""
         self.companion_delay_s = COMPANION_DELAY_S if self.threaded else 0.0
         self._shown_keys: dict[str, str] = {}
         self._progress_state = ("", 0.0)
@@ -609,18 +611,21 @@ class Dashboard(pn.viewable.Viewer):
             return
         self.other_model = None  # the previous scenario's curve must not stay on the plot
         self._companion_wanted = other
+        self.comparison_state = "computing"
 
     def _finish_companion(self, other: Scenario, outcome: Results | None | BaseException):
         """Draw the other model's curve if it still belongs to the results on screen."""
         if isinstance(outcome, BaseException):
             log.error("comparison run failed", exc_info=outcome)
             outcome = None
-        if outcome is None or outcome.scenario_json != self._companion_json:
+        if other.to_json() != self._companion_json:  # inputs have changed since it was asked for
             return
         self.other_model = outcome
+        self.comparison_state = "unavailable" if outcome is None else "shown"
         stream = self.plot_streams.get(DEPTH_PLOT)
-        if stream is not None:
+        if stream is not None and outcome is not None:
             stream.send(self.results)
+        self.status.object = self._status_html(self.results)
 
     def _finish(
         self,
@@ -710,6 +715,11 @@ class Dashboard(pn.viewable.Viewer):
                 f'data-seconds="{results.stage_seconds.get(stage, 0.0):.4f}">'
                 f"{_stage_name(stage)}: {took}</span>"
             )
+        other = plots.MODEL_NAMES[OTHER_MODEL[results.scenario.tunnel.model]]
+        parts.append(
+            f'<span class="comparison-status" data-state="{self.comparison_state}">'
+            f"{html.escape(other)} on the depth plot: {self.comparison_state}</span>"
+        )
         return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
 
     # ---- files ------------------------------------------------------------------------------

@@ -96,7 +96,7 @@ EXTENTS_JS = """() => {
       const extent = {x: [Infinity, -Infinity], y: [Infinity, -Infinity]};
       for (const renderer of model.renderers) {
         const source = renderer.data_source, glyph = renderer.glyph;
-        if (!source || !glyph) continue;
+        if (!source || !glyph || renderer.visible === false) continue;  // not drawn
         for (const axis of ["x", "y"]) {
           const spec = glyph[axis];
           if (!spec || spec.field === undefined) continue;
@@ -413,6 +413,10 @@ def test_axes_cover_the_data_after_a_speed_and_a_soil_change(page):
     type_value(page, "soil.youngs_modulus", "3")  # MPa: about twice the displacement
     wait_for_renders(page, "soil", counts["soil"] + 2)
     wait_for_new_data(page, before, ["Peak dynamic displacement against depth"])
+    page.evaluate(PAINTED_JS)
+    assert uncovered_data(page) == {}
+    # the other model's curve arrives afterwards: the axes cover it too
+    page.locator('.comparison-status[data-state="shown"]').wait_for(timeout=RUN_WAIT_MS)
     page.evaluate(PAINTED_JS)
     assert uncovered_data(page) == {}
 
