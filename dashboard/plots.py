@@ -27,6 +27,8 @@ REFERENCE_FILE = DATA_DIR / "paper_reference.json"
 # A displayed time history keeps at most this many points: a 6-car passage at Δt = 1e-4 s has
 # ~70 000 samples, far more than a plot's pixels; min/max decimation keeps every peak visible.
 MAX_DISPLAY_POINTS = 4000
+# A pinned run's time history is drawn thinner: with 8 pinned runs a plot holds 9 curves.
+PINNED_DISPLAY_POINTS = 1000
 
 MM, KN = 1e3, 1e-3  # m → mm, N → kN
 PLOT_HEIGHT = 300  # px
@@ -153,10 +155,21 @@ def _pinned_layer(layer, results: Results, name: str, colour: str) -> hv.Element
     cached = _PINNED_LAYERS.get(key)
     if cached is not None and cached[0]() is results:
         return cached[1]
-    element = layer(results, name).opts(color=colour, line_width=PINNED_LINE_WIDTH)
+    element = _thinned(layer(results, name)).opts(color=colour, line_width=PINNED_LINE_WIDTH)
     _PINNED_LAYERS[key] = (weakref.ref(results), element)
     weakref.finalize(results, _PINNED_LAYERS.pop, key, None)
     return element
+
+
+def _thinned(element: hv.Element) -> hv.Element:
+    """A pinned run's curve with at most ``PINNED_DISPLAY_POINTS`` points (min/max decimation:
+    its peaks stay); the browser redraws every curve of a plot on each change."""
+    if not isinstance(element, hv.Curve) or len(element) <= PINNED_DISPLAY_POINTS:
+        return element
+    x, y = decimate_min_max(
+        element.dimension_values(0), element.dimension_values(1), PINNED_DISPLAY_POINTS
+    )
+    return element.clone((x, y))
 
 
 def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Element:

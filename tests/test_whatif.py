@@ -402,9 +402,15 @@ def test_every_plot_overlays_the_pinned_runs_under_the_current_one(base_results,
         # block displacement: the current run's Winkler curve follows, as a reference line
         assert names[:3] == ["today", "stiff soil", CURRENT_LABEL], spec.key
         assert [_colour(c) for c in curves[:3]] == [*PINNED_COLOURS[:2], CURRENT_COLOUR]
-        # each pinned curve is that run's own curve (its data, drawn alone)
-        own = _layers(spec.draw(stiff_results))[0]
-        np.testing.assert_array_equal(curves[1].dimension_values(1), own.dimension_values(1))
+        # each pinned curve is that run's own curve (its data, drawn alone), thinned to
+        # PINNED_DISPLAY_POINTS by min/max decimation: every extreme stays
+        own = _layers(spec.draw(stiff_results))[0].dimension_values(1)
+        pinned = curves[1].dimension_values(1)
+        assert pinned.size <= max(plots.PINNED_DISPLAY_POINTS, 1)
+        assert pinned.max() == own.max() and pinned.min() == own.min()
+        assert np.isin(pinned, own).all()
+        if own.size <= plots.PINNED_DISPLAY_POINTS:
+            np.testing.assert_array_equal(pinned, own)
         np.testing.assert_array_equal(curves[2].dimension_values(1), alone[0].dimension_values(1))
     session.set_visible("today", False)
     names = [
@@ -432,3 +438,13 @@ def test_pinned_layers_are_built_once_and_released_with_their_run(base_results):
     del overlays, pinned_run, first, again
     gc.collect()
     assert not any(key in plots._PINNED_LAYERS for key in held)
+
+
+def test_a_pinned_time_history_is_thinned_with_its_extremes_kept():
+    t = np.linspace(0.0, 1.0, 20_001)
+    y = np.sin(40 * t) * np.exp(-t)
+    y[12_345] = 3.0  # one sharp peak
+    thinned = plots._thinned(hv.Curve((t, y)))
+    assert len(thinned) <= plots.PINNED_DISPLAY_POINTS
+    assert thinned.dimension_values(1).max() == 3.0
+    assert thinned.dimension_values(1).min() == y.min()
