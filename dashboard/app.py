@@ -608,6 +608,7 @@ class Dashboard(pn.viewable.Viewer):
         self._companion_json = other.to_json()
         shown = self.other_model
         if shown is not None and shown.scenario_json == self._companion_json:
+            self._companion_wanted = None  # nothing older is left to compute
             return
         self.other_model = None  # the previous scenario's curve must not stay on the plot
         self._companion_wanted = other

@@ -183,13 +183,9 @@ class StageCache:
         self.misses[stage] += 1
         return None
 
-    def put(self, stage: str, key: str, value) -> None:
-        """Store a value, evicting the least recently used beyond the stage's size."""
-        with self._lock:
-            self._store(stage, key, value)
-
     def _store(self, stage: str, key: str, value) -> None:
-        """:meth:`put` with the lock held."""
+        """Store a value (lock held), evicting the least recently used beyond the stage's
+        size."""
         limit = self.transfer_size if stage == TRANSFER else self.size
         entries = self._entries[stage]
         entries[key] = value

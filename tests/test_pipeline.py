@@ -135,8 +135,8 @@ def test_an_edited_profile_file_is_not_served_from_the_cache(tmp_path):
 def test_cache_is_bounded():
     cache = StageCache(size=2, transfer_size=1)
     for key in "abc":
-        cache.put("soil", key, key)
-        cache.put(pipeline.TRANSFER, key, key)
+        for stage in ("soil", pipeline.TRANSFER):
+            cache.fetch(stage, key, lambda key=key: key)
     assert cache.get("soil", "a") is None
     assert cache.get("soil", "b") == "b" and cache.get("soil", "c") == "c"
     assert cache.get(pipeline.TRANSFER, "b") is None
