@@ -70,7 +70,8 @@ server's working directory unless absolute)."""
 
 OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
 DEPTH_PLOT = "depth_profile"  # the plot that also draws the other model's curve
-PLOT_STYLES = {"flex": "1 1 440px"}
+# The opacity is always stated: the browser keeps a style that a new set of styles leaves out.
+PLOT_STYLES = {"flex": "1 1 440px", "opacity": "1"}
 # A plot that a run will redraw is dimmed, not covered by Panel's animated loading spinner: the
 # spinner's animation cost the browser more than the redraw itself (1.4 s of CPU per change).
 STALE_PLOT_STYLES = {**PLOT_STYLES, "opacity": "0.45"}

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from dashboard.app import STALE_PLOT_STYLES
 from model.pipeline import STAGES
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -316,6 +317,20 @@ def test_every_plot_renders_with_data(page):
     assert not page.locator(".error-alert").is_visible()
 
 
+# Number of elements drawn at a given opacity (that of STALE_PLOT_STYLES: plots awaiting a run).
+OPACITY_COUNT_JS = """(opacity) => {
+  let n = 0;
+  const walk = (root) => {
+    for (const el of root.querySelectorAll('*')) {
+      if (getComputedStyle(el).opacity === opacity) n++;
+      if (el.shadowRoot) walk(el.shadowRoot);
+    }
+  };
+  walk(document);
+  return n;
+}"""
+
+
 def test_speed_slider_changes_the_numbers_with_one_run_per_drag(page):
     before = summary_values(page)
     data_before = signatures(page)
@@ -329,6 +344,8 @@ def test_speed_slider_changes_the_numbers_with_one_run_per_drag(page):
     assert after["soil_s_wave_speed"] == before["soil_s_wave_speed"]  # the soil did not change
     page.wait_for_timeout(1000)  # a second run for the same drag would show up by now
     assert render_counts(page) == dict.fromkeys(STAGES, 2)
+    # no plot is left dimmed once it is redrawn
+    assert page.evaluate(OPACITY_COUNT_JS, STALE_PLOT_STYLES["opacity"]) == 0
 
 
 def test_soil_slider_recomputes_only_the_soil_plots(page):
