@@ -13,7 +13,6 @@ from __future__ import annotations
 import html
 import io
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import partial
 
 import panel as pn
@@ -35,26 +34,27 @@ from model.pipeline import Results, SimulationError, run
 Current = Callable[[], tuple[Scenario, Results | None]]
 
 
-@dataclass(frozen=True)
-class RunRow:
-    """The controls of one pinned run in the list."""
+def runs_list_html(runs: list[PinnedRun]) -> str:
+    """The pinned runs as one list: each run's plot colour, name, and whether it is shown.
 
-    name: str
-    name_input: pn.widgets.TextInput
-    visible: pn.widgets.Checkbox
-    restore_button: pn.widgets.Button
-    remove_button: pn.widgets.Button
-    layout: pn.Row
-
-
-def _swatch(colour: str) -> pn.pane.HTML:
-    """A small square of a run's plot colour."""
-    return pn.pane.HTML(
-        f'<div style="width: 14px; height: 14px; background: {colour}; border-radius: 3px; '
-        'margin-top: 10px"></div>',
-        width=20,
-        margin=(0, 0, 0, 5),
+    One HTML element for the whole list, not a row of widgets per run: every widget adds its
+    own styled DOM tree, and the browser restyles them all on each repaint of the plots.
+    """
+    items = "".join(
+        f'<li class="whatif-run{"" if run.visible else " whatif-hidden"}">'
+        f'<span class="whatif-swatch" style="background: {run.colour}"></span>'
+        f"{html.escape(run.name)}{'' if run.visible else ' <em>(hidden)</em>'}</li>"
+        for run in runs
     )
+    return f'<ul class="whatif-list">{items}</ul>' if runs else ""
+
+
+RUNS_LIST_CSS = """
+ul.whatif-list { list-style: none; margin: 4px 0; padding: 0; }
+ul.whatif-list li { display: flex; align-items: center; gap: 6px; padding: 2px 0; }
+.whatif-swatch { width: 14px; height: 14px; border-radius: 3px; flex: none; }
+li.whatif-hidden { color: #6e7781; }
+"""
 
 
 class WhatIfPanel(pn.viewable.Viewer):
@@ -91,7 +91,6 @@ class WhatIfPanel(pn.viewable.Viewer):
         self._compute = compute if compute is not None else partial(run, cache=None)
         self._preset = preset if preset is not None else (lambda: "paper")
         self.session = WhatIfSession()
-        self.rows: list[RunRow] = []
 
         self.name_input = pn.widgets.TextInput(
             placeholder="Name (default: what differs from the preset)",
@@ -118,7 +117,49 @@ class WhatIfPanel(pn.viewable.Viewer):
             sizing_mode="stretch_width",
             css_classes=["whatif-message"],
         )
-        self.runs_column = pn.Column(sizing_mode="stretch_width", css_classes=["whatif-runs"])
+        self.runs_list = pn.pane.HTML(
+            "",
+            stylesheets=[RUNS_LIST_CSS],
+            sizing_mode="stretch_width",
+            css_classes=["whatif-runs"],
+        )
+        # one set of controls acts on the run chosen here (a fixed number of widgets)
+        self.run_select = pn.widgets.Select(
+            label="Pinned run",
+            options=[],
+            sizing_mode="stretch_width",
+            css_classes=["whatif-chosen"],
+        )
+        self.run_select.param.watch(self._on_choose, "value")
+        self.rename_input = pn.widgets.TextInput(
+            label="Name", sizing_mode="stretch_width", css_classes=["whatif-rename"]
+        )
+        self.rename_input.param.watch(self._on_rename, "value")
+        self.shown_checkbox = pn.widgets.Checkbox(
+            label="shown in the plots", value=True, css_classes=["whatif-shown"]
+        )
+        self.shown_checkbox.param.watch(self._on_visible, "value")
+        self.restore_button = pn.widgets.Button(
+            label="Restore as current",
+            description="Make this run's inputs the current ones",
+            css_classes=["whatif-restore"],
+        )
+        self.restore_button.on_click(self._on_restore)
+        self.remove_button = pn.widgets.Button(
+            label="Remove", description="Forget this pinned run", css_classes=["whatif-remove"]
+        )
+        self.remove_button.on_click(self._on_remove)
+        self.run_controls = pn.Column(
+            pn.Row(self.run_select, self.rename_input, sizing_mode="stretch_width"),
+            pn.Row(
+                self.shown_checkbox,
+                self.restore_button,
+                self.remove_button,
+                sizing_mode="stretch_width",
+            ),
+            visible=False,
+            sizing_mode="stretch_width",
+        )
         self.reference_select = pn.widgets.Select(
             label="Differences to",
             options=[CURRENT_LABEL],
@@ -162,7 +203,8 @@ class WhatIfPanel(pn.viewable.Viewer):
         return pn.Column(
             pn.Row(self.name_input, self.pin_button, sizing_mode="stretch_width"),
             self.message,
-            self.runs_column,
+            self.runs_list,
+            self.run_controls,
             pn.Row(self.save_button, self.report_button, sizing_mode="stretch_width"),
             pn.Row(
                 pn.pane.Markdown("Load a session file:", width=150),
@@ -210,34 +252,54 @@ class WhatIfPanel(pn.viewable.Viewer):
             self._show_message(str(error))
             return
         self.name_input.value = ""
-        self._changed()
+        self._changed(chosen=self.session.names()[-1])  # the controls act on the new run
 
-    def _on_rename(self, pinned: PinnedRun, event: param.parameterized.Event) -> None:
-        """Rename a run; a refused name is reported and the old one shown again."""
-        if event.new == pinned.name:
+    def _chosen(self) -> PinnedRun | None:
+        """The pinned run the controls act on."""
+        name = self.run_select.value
+        return self.session.get(name) if name in self.session.names() else None
+
+    def _on_choose(self, _event=None) -> None:
+        """Show the chosen run's name and visibility in the controls."""
+        chosen = self._chosen()
+        if chosen is not None:
+            self.rename_input.value = chosen.name
+            self.shown_checkbox.value = chosen.visible
+
+    def _on_rename(self, event: param.parameterized.Event) -> None:
+        """Rename the chosen run; a refused name is reported and the old one shown again."""
+        chosen = self._chosen()
+        if chosen is None or event.new == chosen.name:
             return
         try:
-            self.session.rename(pinned.name, event.new)
+            self.session.rename(chosen.name, event.new)
         except ValueError as error:
             self._show_message(str(error))
-            event.obj.value = pinned.name
+            self.rename_input.value = chosen.name
             return
+        self._changed(chosen=event.new)
+
+    def _on_visible(self, event: param.parameterized.Event) -> None:
+        """Show or hide the chosen run in the plots."""
+        chosen = self._chosen()
+        if chosen is None or event.new == chosen.visible:
+            return
+        self.session.set_visible(chosen.name, event.new)
         self._changed()
 
-    def _on_visible(self, pinned: PinnedRun, event: param.parameterized.Event) -> None:
-        """Show or hide a run in the plots."""
-        self.session.set_visible(pinned.name, event.new)
-        self._changed()
+    def _on_restore(self, _event=None) -> None:
+        """Make the chosen run's inputs the current scenario."""
+        chosen = self._chosen()
+        if chosen is not None:
+            self._clear_message()
+            self._restore(self.session.restore(chosen.name))
 
-    def _on_restore(self, pinned: PinnedRun, _event=None) -> None:
-        """Make a pinned run's inputs the current scenario."""
-        self._clear_message()
-        self._restore(self.session.restore(pinned.name))
-
-    def _on_remove(self, pinned: PinnedRun, _event=None) -> None:
-        """Forget a pinned run."""
-        self.session.remove(pinned.name)
-        self._changed()
+    def _on_remove(self, _event=None) -> None:
+        """Forget the chosen run."""
+        chosen = self._chosen()
+        if chosen is not None:
+            self.session.remove(chosen.name)
+            self._changed()
 
     def _on_reference(self, event: param.parameterized.Event) -> None:
         """Take the differences to another run."""
@@ -265,8 +327,8 @@ class WhatIfPanel(pn.viewable.Viewer):
     def _release(self, session_context) -> None:
         """The browser session closed: let go of every pinned result."""
         self.session.clear()
-        self.rows = []
-        self.runs_column.objects = []
+        self.runs_list.object = ""
+        self.run_select.options = []
 
     # ---- files --------------------------------------------------------------------------------
     def _session_file(self) -> io.StringIO:
@@ -280,43 +342,33 @@ class WhatIfPanel(pn.viewable.Viewer):
         return io.BytesIO(session_report_html(self.session, results).encode("utf-8"))
 
     # ---- state ----------------------------------------------------------------------------
-    def _changed(self) -> None:
+    def _changed(self, chosen: str | None = None) -> None:
         """After any change of the pinned runs: list, reference, table, and tell the app."""
         self._clear_message()
-        self._rebuild()
+        self._rebuild(chosen)
         self.param.trigger("overlays_changed")
 
-    def _rebuild(self) -> None:
-        """Rebuild the list of runs, the reference options and the table."""
-        self.rows = [self._row(pinned) for pinned in self.session.runs]
-        self.runs_column.objects = [row.layout for row in self.rows]
+    def _rebuild(self, chosen: str | None = None) -> None:
+        """Rebuild the list of runs, the controls, the reference options and the table.
+
+        ``chosen`` is the run the controls act on next (default: the one chosen before if it
+        is still pinned, else the last one).
+        """
+        names = self.session.names()
+        if chosen not in names:
+            chosen = self.run_select.value if self.run_select.value in names else None
+        if chosen is None and names:
+            chosen = names[-1]
+        self.runs_list.object = runs_list_html(self.session.runs)
+        self.run_select.param.update(options=names, value=chosen)
+        self._on_choose()
+        self.run_controls.visible = bool(names)
         self.reference_select.param.update(
-            options=[*self.session.names(), CURRENT_LABEL], value=self.session.reference
+            options=[*names, CURRENT_LABEL], value=self.session.reference
         )
         self.pin_button.disabled = len(self.session.runs) >= MAX_PINNED
         self.save_button.disabled = self.report_button.disabled = not self.session.runs
         self.refresh()
-
-    def _row(self, pinned: PinnedRun) -> RunRow:
-        """Controls of one pinned run: colour, name, shown, restore, remove."""
-        name_input = pn.widgets.TextInput(value=pinned.name, sizing_mode="stretch_width")
-        name_input.param.watch(partial(self._on_rename, pinned), "value")
-        visible = pn.widgets.Checkbox(label="shown", value=pinned.visible, width=65)
-        visible.param.watch(partial(self._on_visible, pinned), "value")
-        restore = pn.widgets.Button(label="Restore", width=70)
-        restore.on_click(partial(self._on_restore, pinned))
-        remove = pn.widgets.Button(label="✕", width=35, description="Remove this run")
-        remove.on_click(partial(self._on_remove, pinned))
-        layout = pn.Row(
-            _swatch(pinned.colour),
-            name_input,
-            visible,
-            restore,
-            remove,
-            sizing_mode="stretch_width",
-            css_classes=["whatif-run"],
-        )
-        return RunRow(pinned.name, name_input, visible, restore, remove, layout)
 
     def _show_message(self, text: str) -> None:
         """Show a problem in the component (never a traceback)."""

@@ -40,13 +40,17 @@ pytestmark = [
 
 PINNED = "today"
 
-# Names of every figure's renderers (HoloViews names a glyph renderer after its layer's label).
+# Every figure's legend entries in drawing order (a legend item labelled by a data field, the
+# pinned runs' lines, stands for one entry per run, as the browser draws it).
 LEGENDS_JS = """() => {
   const out = {};
   for (const doc of (window.Bokeh ? window.Bokeh.documents : [])) {
     for (const model of doc.all_models) {
       if (model.type !== "Figure" || !model.title) continue;
-      out[model.title.text] = model.renderers.filter(r => r.visible).map(r => r.name);
+      const legends = [...model.center, ...model.below].filter(m => m.type === "Legend");
+      out[model.title.text] = legends.flatMap(legend => legend.items
+        .filter(item => item.renderers.some(r => r.visible))
+        .flatMap(item => item.get_labels_list_from_label_prop()));
     }
   }
   return out;
@@ -148,7 +152,8 @@ def test_restore_makes_the_pinned_run_current(page):
     _pin(page, PINNED)
     _change_speed(page, "90")
     counts = render_counts(page)
-    page.locator(".whatif-run").first.get_by_role("button", name="Restore").click()
+    page.locator(".whatif-chosen select").select_option(PINNED)
+    page.locator(".whatif-restore button").click()
     wait_for_renders(page, "soil", counts["soil"] + 1)
     box = page.locator(".param-train-speed_kmh input").first
     assert float(box.input_value()) == 100.0

@@ -71,7 +71,11 @@ def test_pin_names_by_difference_and_never_recomputes(board, stiff_results, monk
     # the cheap scenario differs from the single_bogie preset in speed and output depths
     assert session.names() == ["speed 100 km/h, output depths 11", "stiff soil"]
     assert session.runs[0].results is not stiff_results  # the first pin kept its own results
-    assert [r.name for r in panel.rows] == session.names()
+    assert panel.run_select.options == session.names()
+    assert panel.run_select.value == "stiff soil"  # the controls act on the last pinned run
+    listed = panel.runs_list.object
+    assert listed.index("speed 100 km/h") < listed.index("stiff soil")
+    assert PINNED_COLOURS[0] in listed and PINNED_COLOURS[1] in listed
     assert len(board.events) == 2 and board.computed == []
     assert panel.name_input.value == ""
     overlays = panel.overlays()
@@ -114,17 +118,23 @@ def test_rename_hide_restore_remove_from_the_list(board, stiff_results):
     _pin(panel, "today")
     board.results, board.scenario = stiff_results, stiff_results.scenario
     _pin(panel, "stiff")
-    panel.rows[1].name_input.value = "stiff soil"
+    assert panel.run_select.value == "stiff" and panel.rename_input.value == "stiff"
+    panel.rename_input.value = "stiff soil"
     assert panel.session.names() == ["today", "stiff soil"]
-    panel.rows[1].name_input.value = "today"  # taken: refused, the old name is shown again
-    assert panel.message.visible and panel.rows[1].name_input.value == "stiff soil"
-    panel.rows[0].visible.value = False
+    assert panel.run_select.value == "stiff soil"
+    panel.rename_input.value = "today"  # taken: refused, the old name is shown again
+    assert panel.message.visible and panel.rename_input.value == "stiff soil"
+    panel.run_select.value = "today"
+    assert panel.rename_input.value == "today" and panel.shown_checkbox.value
+    panel.shown_checkbox.value = False
     assert [n for n, _, _ in panel.overlays()] == ["stiff soil"]
     assert "today" in panel.table.object  # hidden from the plots, still compared
-    panel.rows[0].restore_button.clicks += 1
+    assert "(hidden)" in panel.runs_list.object
+    panel.restore_button.clicks += 1
     assert board.restored[-1].to_json() == panel.session.get("today").scenario_json
-    panel.rows[0].remove_button.clicks += 1
-    assert panel.session.names() == ["stiff soil"] and len(panel.rows) == 1
+    panel.remove_button.clicks += 1
+    assert panel.session.names() == ["stiff soil"] and panel.run_select.options == ["stiff soil"]
+    assert panel.run_select.value == "stiff soil" and panel.run_controls.visible
     assert len(board.events) == 2 + 1 + 1 + 1  # pins, rename, hide, remove (restore: none)
 
 
@@ -147,7 +157,8 @@ def test_session_save_and_load_round_trip(board, stiff_results, cache, base_resu
     _pin(panel, "today")
     board.results, board.scenario = stiff_results, stiff_results.scenario
     _pin(panel, "stiff soil")
-    panel.rows[0].visible.value = False
+    panel.run_select.value = "today"
+    panel.shown_checkbox.value = False
     panel.reference_select.value = "stiff soil"
     saved = panel.save_button.callback().getvalue()
     assert json.loads(saved)["format"] == SESSION_FORMAT
@@ -159,7 +170,8 @@ def test_session_save_and_load_round_trip(board, stiff_results, cache, base_resu
     assert other.computed == [base_results.scenario_json, stiff_results.scenario_json]
     assert other.restored[-1].to_json() == stiff_results.scenario_json  # the saved current
     assert fresh.session.names() == ["today", "stiff soil"]
-    assert [row.visible.value for row in fresh.rows] == [False, True]
+    assert [run.visible for run in fresh.session.runs] == [False, True]
+    assert fresh.runs_list.object == panel.runs_list.object
     assert fresh.reference_select.value == "stiff soil"
     other.results = stiff_results  # the dashboard re-ran the restored scenario
     fresh.refresh()
@@ -202,4 +214,5 @@ def test_two_panels_share_nothing_and_closing_releases_the_runs(board, base_resu
     assert second.session.runs == [] and second.overlays() == []
     assert first.session is not second.session
     first._release(None)  # what the server calls when the browser session closes
-    assert first.session.runs == [] and first.rows == []
+    assert first.session.runs == [] and first.runs_list.object == ""
+    assert first.run_select.options == []
