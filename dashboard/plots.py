@@ -124,40 +124,71 @@ def run_layers(
 
     Parameters
     ----------
-    layer : callable(results, label) -> Element
+    layer : callable(results, label) -> Curve
         Draws one run's curve.
     results : Results or None
         The current run (None: only the pinned runs, e.g. a report of a saved session).
     label : str
         Legend name of the current run when nothing is overlaid.
     overlays : sequence of (label, Results, colour)
-        Pinned runs, drawn in this order under the current run.
+        Pinned runs, drawn in this order under the current run, all in one
+        :func:`pinned_runs_layer` layer.
     """
     if not overlays:
         return [] if results is None else [layer(results, label)]
-    pinned = [_pinned_layer(layer, run, name, colour) for name, run, colour in overlays]
+    pinned = pinned_runs_layer(layer, overlays)
     if results is None:
-        return pinned
+        return [pinned]
     current = layer(results, CURRENT_LABEL).opts(
         color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
     )
-    return [*pinned, current]
+    return [pinned, current]
 
 
-_PINNED_LAYERS: dict[tuple, tuple[weakref.ref, hv.Element]] = {}
-"""Layers of pinned runs by (id(results), layer, name, colour), each dropped with its Results."""
+PINNED_RUN = hv.Dimension("run", label="Pinned run")
+
+_PINNED_LAYERS: dict[tuple, hv.Contours] = {}
+"""Pinned layers by (layer, (id(results), name, colour) of each run), each dropped as soon as
+one of its Results is."""
 
 
-def _pinned_layer(layer, results: Results, name: str, colour: str) -> hv.Element:
-    """A pinned run's layer, built once: a pinned run never changes, and the very same element
-    lets a plot updated in place skip re-sending its data to the browser."""
-    key = (id(results), layer.__qualname__, name, colour)
+def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overlays) -> hv.Contours:
+    """Every pinned run's curve in one element, one line per run in its colour and legend entry.
+
+    One Contours element (one Bokeh renderer), not a Curve per run: on every change of the
+    current run the browser repaints each renderer of the plot and restyles it (Bokeh reads
+    its CSS on each paint); with 8 pinned runs as 8 curves that cost about 0.5 s per change
+    (benchmarks/bench_whatif.py). The element is built once per set of pinned runs (a pinned
+    run never changes): the very same element lets a plot updated in place skip re-sending
+    its data to the browser.
+
+    Parameters
+    ----------
+    layer : callable(results, label) -> Curve
+        Draws one run's curve.
+    overlays : sequence of (label, Results, colour)
+        The pinned runs, in drawing order.
+    """
+    key = (layer.__qualname__, tuple((id(run), name, colour) for name, run, colour in overlays))
     cached = _PINNED_LAYERS.get(key)
-    if cached is not None and cached[0]() is results:
-        return cached[1]
-    element = _thinned(layer(results, name)).opts(color=colour, line_width=PINNED_LINE_WIDTH)
-    _PINNED_LAYERS[key] = (weakref.ref(results), element)
-    weakref.finalize(results, _PINNED_LAYERS.pop, key, None)
+    if cached is not None:
+        return cached
+    curves = [_thinned(layer(run, name)) for name, run, _ in overlays]
+    x_dim, y_dim = curves[0].kdims[0], curves[0].vdims[0]
+    paths = [
+        {x_dim.name: c.dimension_values(0), y_dim.name: c.dimension_values(1), "run": name}
+        for c, (name, _, _) in zip(curves, overlays, strict=True)
+    ]
+    element = hv.Contours(paths, kdims=[x_dim, y_dim], vdims=[PINNED_RUN]).opts(
+        color="run",
+        cmap={name: colour for name, _, colour in overlays},
+        line_width=PINNED_LINE_WIDTH,
+        show_legend=True,
+        **_FOLLOW_DATA,
+    )
+    _PINNED_LAYERS[key] = element
+    for _, run, _ in overlays:
+        weakref.finalize(run, _PINNED_LAYERS.pop, key, None)
     return element
 
 

@@ -386,6 +386,13 @@ def _layers(element):
     return [layer for layer in layers if isinstance(layer, hv.Curve)]
 
 
+def _pinned(element) -> dict[str, np.ndarray]:
+    """The pinned runs' lines of a plot by name: (n, 2) x, y of each, in drawing order."""
+    layers = list(element.values()) if isinstance(element, hv.Overlay) else [element]
+    (pinned,) = [layer for layer in layers if isinstance(layer, hv.Contours)]
+    return {line.dimension_values("run")[0]: line.array(line.kdims) for line in pinned.split()}
+
+
 def _colour(element):
     return element.opts.get().kwargs.get("color")
 
@@ -397,32 +404,42 @@ def test_every_plot_overlays_the_pinned_runs_under_the_current_one(base_results,
     overlays = session.overlays()
     for spec in plots.PLOTS:
         alone = _layers(spec.draw(base_results))
-        curves = _layers(spec.draw(base_results, overlays=overlays))
-        names = [c.label for c in curves]
-        # block displacement: the current run's Winkler curve follows, as a reference line
-        assert names[:3] == ["today", "stiff soil", CURRENT_LABEL], spec.key
-        assert [_colour(c) for c in curves[:3]] == [*PINNED_COLOURS[:2], CURRENT_COLOUR]
-        # each pinned curve is that run's own curve (its data, drawn alone), thinned to
+        drawn = spec.draw(base_results, overlays=overlays)
+        layers = list(drawn.values())
+        pinned_layer = next(x for x in layers if isinstance(x, hv.Contours))
+        curves = _layers(drawn)
+        # the pinned runs under the current run (on top, in its colour); on the block
+        # displacement plot the current run's Winkler curve follows as a reference line
+        assert layers.index(pinned_layer) < layers.index(curves[0]), spec.key
+        assert curves[0].label == CURRENT_LABEL and _colour(curves[0]) == CURRENT_COLOUR
+        assert pinned_layer.opts.get().kwargs["cmap"] == dict(
+            zip(["today", "stiff soil"], PINNED_COLOURS[:2], strict=True)
+        )
+        pinned = _pinned(drawn)
+        assert list(pinned) == ["today", "stiff soil"], spec.key
+        # each pinned line is that run's own curve (its data, drawn alone), thinned to
         # PINNED_DISPLAY_POINTS by min/max decimation: every extreme stays
-        own = _layers(spec.draw(stiff_results))[0].dimension_values(1)
-        pinned = curves[1].dimension_values(1)
-        assert pinned.size <= max(plots.PINNED_DISPLAY_POINTS, 1)
-        assert pinned.max() == own.max() and pinned.min() == own.min()
-        assert np.isin(pinned, own).all()
-        if own.size <= plots.PINNED_DISPLAY_POINTS:
-            np.testing.assert_array_equal(pinned, own)
-        np.testing.assert_array_equal(curves[2].dimension_values(1), alone[0].dimension_values(1))
+        own = _layers(spec.draw(stiff_results))[0]
+        own_x, own_y = own.dimension_values(0), own.dimension_values(1)
+        x, y = pinned["stiff soil"].T
+        assert y.size <= max(plots.PINNED_DISPLAY_POINTS, 1)
+        assert y.max() == own_y.max() and y.min() == own_y.min()
+        assert np.isin(y, own_y).all() and np.isin(x, own_x).all()
+        if own_y.size <= plots.PINNED_DISPLAY_POINTS:
+            np.testing.assert_array_equal(y, own_y)
+        np.testing.assert_array_equal(curves[0].dimension_values(1), alone[0].dimension_values(1))
     session.set_visible("today", False)
-    names = [
-        c.label for c in _layers(plots.invert_load_plot(base_results, overlays=session.overlays()))
+    assert list(_pinned(plots.invert_load_plot(base_results, overlays=session.overlays()))) == [
+        "stiff soil"
     ]
-    assert names == ["stiff soil", CURRENT_LABEL]
 
 
 def test_plots_without_a_current_run_show_only_the_pinned_ones(base_results, stiff_results):
     overlays = [("a", base_results, PINNED_COLOURS[0]), ("b", stiff_results, PINNED_COLOURS[1])]
     for spec in plots.PLOTS:
-        assert [c.label for c in _layers(spec.draw(None, overlays=overlays))] == ["a", "b"]
+        drawn = spec.draw(None, overlays=overlays)
+        assert list(_pinned(drawn)) == ["a", "b"]
+        assert not any(c.label == CURRENT_LABEL for c in _layers(drawn))
 
 
 def test_pinned_layers_are_built_once_and_released_with_their_run(base_results):
@@ -430,12 +447,16 @@ def test_pinned_layers_are_built_once_and_released_with_their_run(base_results):
     re-sends no data for it); the layer is forgotten once the run is released."""
     pinned_run = dataclasses.replace(base_results)  # a Results object of its own
     overlays = [("pinned", pinned_run, PINNED_COLOURS[0])]
-    first = _layers(plots.invert_load_plot(base_results, overlays=overlays))[0]
-    again = _layers(plots.invert_load_plot(base_results, overlays=overlays))[0]
-    assert again is first
-    held = [key for key in plots._PINNED_LAYERS if key[0] == id(pinned_run)]
+
+    def pinned_layer(overlays):
+        drawn = plots.invert_load_plot(base_results, overlays=overlays)
+        return next(x for x in drawn.values() if isinstance(x, hv.Contours))
+
+    first = pinned_layer(overlays)
+    assert pinned_layer(overlays) is first
+    held = [key for key in plots._PINNED_LAYERS if key[1][0][0] == id(pinned_run)]
     assert len(held) == 1
-    del overlays, pinned_run, first, again
+    del overlays, pinned_run, first
     gc.collect()
     assert not any(key in plots._PINNED_LAYERS for key in held)
 
