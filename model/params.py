@@ -841,8 +841,8 @@ class Numerics(param.Parameterized):
         "c_s/r Hz), and interpolated in between (6-point Lagrange); below N such steps (near "
         "0 Hz, where the 2D kernel grows like ln f) at every frequency of the grid. 0 evaluates "
         "it at every frequency. Bounds 6–1024 or 0: with fewer than 6 samples per cycle the "
-        "interpolation error exceeds 0.1 % of the transfer functions (tests); 12 keeps it "
-        "below 1e-4.",
+        "interpolation errs by up to 1 % of the transfer functions (docs/tunnel_soil.md); 12 "
+        "keeps the error below 1e-4.",
     )
 
 

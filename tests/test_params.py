@@ -164,7 +164,7 @@ def test_non_finite_values_are_refused_everywhere(cls, name, p, bad):
 @pytest.mark.parametrize("bad", [1, 5, -1, 1025])
 def test_kernel_sampling_takes_zero_or_at_least_six_samples_per_cycle(bad):
     """0 (every frequency) and [6, 1024] are accepted; 1–5 samples per cycle would interpolate
-    across too coarse a sampling (error > 0.1 %, tests/test_longterm.py) and are refused with
+    across too coarse a sampling (errors up to 1 %, docs/tunnel_soil.md) and are refused with
     the parameter, the value and the allowed values named."""
     numerics = Numerics()
     for good in (0, 6, 1024):
