@@ -71,6 +71,7 @@ class _RangeMessage:
             ) from None
 
     def _allowed_text(self, bounds, inclusive_bounds) -> str:
+        """The allowed values, as the refusal message states them."""
         return _format_range(bounds, inclusive_bounds)
 
 
@@ -97,10 +98,12 @@ class CountOrOff(Count):
     """A count within its bounds, or 0, which switches off what the count refines."""
 
     def _validate_bounds(self, val, bounds, inclusive_bounds):
+        """0 always passes; any other value is checked against the bounds."""
         if val != 0:
             super()._validate_bounds(val, bounds, inclusive_bounds)
 
     def _allowed_text(self, bounds, inclusive_bounds) -> str:
+        """The bounds, and 0."""
         return f"{_format_range(bounds, inclusive_bounds)} or 0"
 
 
