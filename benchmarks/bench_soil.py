@@ -8,6 +8,9 @@ loading it from the cache) and the best of N warm calls:
 - the whole soil stage ``soil_response`` for the paper preset: a 6.66 s line load at 1e-4 s
   (the synthetic six-car train of tests/test_settlement.py), default numerics (32 harmonics,
   100 Hz, padding 8, 71 depths); target ≤ 1 s.
+- the tunnel–soil transfer functions of the soil stage (``model.longterm.section_transfer``,
+  receptance and stresses) on that load's record grid, 2D and 2.5D, with the kernel evaluated at
+  every frequency (``kernel_samples_per_cycle = 0``) and sampled at the default.
 
 Timings are wall-clock on a shared machine: read the best of N.
 """
@@ -24,6 +27,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from model.longterm import section_transfer  # noqa: E402
 from model.params import Scenario, Soil, Tunnel  # noqa: E402
 from model.settlement import soil_response  # noqa: E402
 from model.tunnel_soil import invert_receptance  # noqa: E402
@@ -74,6 +78,18 @@ def main() -> None:
         f"{result.depth_m[r]:g} m: {1e3 * result.peak_disp_m[r]:.2f} mm" for r in rows
     )
     print(f"  synthetic load peak {load.max() / 1e3:.1f} kN/m; peak downward displacement {peaks}")
+
+    default = scenario.numerics.kernel_samples_per_cycle
+    for model in ("2d", "2.5d"):
+        for samples in (0, default):
+            case = scenario.copy()
+            case.tunnel.model = model
+            case.numerics.kernel_samples_per_cycle = samples
+            first, best = best_of(lambda case=case: section_transfer(load, dt, case), REPEATS)
+            print(
+                f"section_transfer {model}, kernel_samples_per_cycle = {samples}: first "
+                f"{first:.3f} s, best of {REPEATS} {best:.3f} s"
+            )
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ The chain, per depth d below the ring–soil interface directly under the invert
 1. **Dynamic stresses.** The stress transfer functions of the tunnel–soil model (stress per unit
    downward line load at the invert, six components of :class:`StressField`) times the spectrum
    of the line load, transformed back to time on the soil stage's grid
-   (:func:`model.settlement.padded_record_grid`: same zero padding, band limit and output step).
+   (:func:`model.settlement.padded_record_grid`: same zero padding, band limit and output step),
+   the kernel sampled and interpolated alike (:func:`model.settlement.record_grid_transfer`).
    In 2D the axial stress is the plane-strain one, σ_xx = λ*(ε_rr + ε_θθ) =
    λ*/(2(λ* + μ*)) (σ_rr + σ_θθ), and σ_rx = σ_θx = 0.
 2. **Zero-frequency bin.** Unlike the 2D static displacement, the 2D static *stresses* are
@@ -49,6 +50,7 @@ from model.settlement import (
     displacement_response,
     output_depths,
     padded_record_grid,
+    record_grid_transfer,
 )
 from model.tunnel_soil import soil_field
 from model.tunnel_soil_3d import StressField, invert_response_2p5d
@@ -184,16 +186,17 @@ def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField
 
 
 def _grid_transfer(f_hz, depth, scenario) -> tuple[np.ndarray, StressField]:
-    """:func:`invert_transfer` at a record grid's frequencies, row 0 the DC band value.
+    """:func:`invert_transfer` on a record grid, row 0 the DC band value (module docstring,
+    step 2), by :func:`model.settlement.record_grid_transfer` like the displacements."""
 
-    The DC row is Re of the value at Δf/(2e) (module docstring, step 2), evaluated in the same
-    kernel call as the other frequencies.
-    """
-    freq = np.concatenate([[0.5 * f_hz[1] / math.e], f_hz[1:]])
-    receptance, stresses = invert_transfer(freq, depth, scenario)
-    for component in (receptance, *stress_components(stresses)):
-        component[0] = component[0].real
-    return receptance, stresses
+    def evaluate(freq):
+        receptance, stresses = invert_transfer(freq, depth, scenario)
+        return receptance, *stress_components(stresses)
+
+    receptance, *components = record_grid_transfer(
+        f_hz, depth, evaluate, scenario.tunnel, scenario.soil, scenario.numerics
+    )
+    return receptance, StressField(**dict(zip(STRESS_COMPONENTS, components, strict=True)))
 
 
 def deviator_stress(
@@ -253,7 +256,7 @@ def stress_response(line_load_N_per_m, dt_s: float, depth_m, scenario) -> Stress
         Depths d ≥ 0 below the ring–soil interface (m).
     scenario : model.params.Scenario
         Uses tunnel, soil and numerics (n_harmonics, soil_max_frequency, zero_pad_factor,
-        max_depth).
+        max_depth, kernel_samples_per_cycle).
 
     Returns
     -------
@@ -326,7 +329,8 @@ def section_response(
         Sampling interval (s), > 0.
     scenario : model.params.Scenario
         Uses tunnel, soil, train.speed (2.5D model) and numerics (n_harmonics,
-        soil_max_frequency, zero_pad_factor, psd_segment, max_depth, n_depths).
+        soil_max_frequency, zero_pad_factor, psd_segment, max_depth, n_depths,
+        kernel_samples_per_cycle).
     transfer : SectionTransfer, optional
         :func:`section_transfer` of a record of the same length and step and the same
         scenario, to reuse; computed when not given.

@@ -61,6 +61,7 @@ SOIL_NUMERICS = (
     "psd_segment",
     "max_depth",
     "n_depths",
+    "kernel_samples_per_cycle",
     *WAVENUMBER_NUMERICS,
 )
 

@@ -161,6 +161,28 @@ def test_non_finite_values_are_refused_everywhere(cls, name, p, bad):
         setattr(cls(), name, bad)
 
 
+@pytest.mark.parametrize("bad", [1, 5, -1, 1025])
+def test_kernel_sampling_takes_zero_or_at_least_six_samples_per_cycle(bad):
+    """0 (every frequency) and [6, 1024] are accepted; 1–5 samples per cycle would interpolate
+    across too coarse a sampling (errors up to 1 %, docs/tunnel_soil.md) and are refused with
+    the parameter, the value and the allowed values named."""
+    numerics = Numerics()
+    for good in (0, 6, 1024):
+        numerics.kernel_samples_per_cycle = good
+        assert numerics.kernel_samples_per_cycle == good
+    with pytest.raises(
+        ValueError,
+        match=rf"^Numerics\.kernel_samples_per_cycle = {bad} is outside the allowed range "
+        r"\[6, 1024\] or 0 \(Kernel samples per cycle\)$",
+    ):
+        numerics.kernel_samples_per_cycle = bad
+    with pytest.raises(ValueError, match=r"numerics.kernel_samples_per_cycle = 'x' is not a whole"):
+        Scenario().set_value("numerics.kernel_samples_per_cycle", "x")
+    scenario = Scenario()
+    scenario.set_value("numerics.kernel_samples_per_cycle", "0")
+    assert Scenario.from_json(scenario.to_json()).numerics.kernel_samples_per_cycle == 0
+
+
 def test_dotted_set_parses_and_refuses():
     s = Scenario.paper()
     s.set_value("train.speed_kmh", "60")

@@ -191,6 +191,19 @@ def test_every_numerics_parameter_is_in_some_stage_key():
     assert used == set(Numerics.param) - {"name"}
 
 
+@pytest.mark.parametrize("model", ["2d", "2.5d"])
+def test_kernel_sampling_changes_the_soil_keys_only(model):
+    """The kernel sampling changes the transfer functions (tests/test_longterm.py): a cached
+    soil stage or transfer made with another sampling must not be served."""
+    scenario = Scenario.paper()
+    scenario.tunnel.model = model
+    before = pipeline.stage_keys(scenario)
+    scenario.numerics.kernel_samples_per_cycle = 0
+    after = pipeline.stage_keys(scenario)
+    changed = {stage for stage in before if before[stage] != after[stage]}
+    assert changed == {"soil", "longterm", pipeline.TRANSFER}
+
+
 def test_progress_reports_each_stage_in_order_from_zero_to_one(cheap_scenario):
     calls = []
     run(cheap_scenario(), progress=lambda stage, f: calls.append((stage, f)), cache=None)

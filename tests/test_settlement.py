@@ -5,7 +5,13 @@ import numpy as np
 import pytest
 
 from model.params import Numerics, Scenario, Soil, Tunnel
-from model.settlement import dc_band_receptance, decimation_factor, soil_response
+from model.settlement import (
+    dc_band_receptance,
+    decimation_factor,
+    kernel_interpolation_matrix,
+    kernel_sample_bins,
+    soil_response,
+)
 from model.spectra import fourier_transform, one_sided_psd
 from model.tunnel_soil import invert_receptance
 
@@ -196,6 +202,41 @@ def test_dc_bin_receptance_is_the_band_average(soil_name):
         assert 1.6 < order < 2.4
 
 
+# ---- kernel sampling ----------------------------------------------------------------------
+def test_kernel_samples_are_n_per_wave_period_above_a_dense_band():
+    """c₂ = 40 m/s, r = 40 m, Δf = 0.02 Hz: the period c₂/r = 1 Hz spans 50 bins; N = 8 gives
+    the stride s = ⌊50/8⌋ = 6, every bin below N s = 48 (where the kernel's step relative to f
+    reaches 1/N), then every 6th and the last bin. N = 0, or fewer than 2N bins per period
+    (stride 1), evaluates every bin."""
+    bins = kernel_sample_bins(1000, 0.02, 8, 40.0, 40.0)
+    np.testing.assert_array_equal(
+        bins, np.concatenate([np.arange(48), np.arange(48, 999, 6), [999]])
+    )
+    assert np.max(np.diff(bins)) * 0.02 <= 40.0 / (8 * 40.0)
+    assert (bins[48] - bins[47]) / bins[48] <= 1 / 8
+    for n_per_cycle in (0, 32):
+        np.testing.assert_array_equal(
+            kernel_sample_bins(1000, 0.02, n_per_cycle, 40.0, 40.0), np.arange(1000)
+        )
+
+
+def test_kernel_interpolation_copies_samples_and_is_exact_for_quintics():
+    """Sampled bins are copied bit for bit; between them the 6-point Lagrange weights reproduce
+    every polynomial of degree ≤ 5 (to rounding: 1e-12 on values of order 1), also where the
+    spacing changes at the top of the dense band and in the short last interval; the DC bin
+    (a band value, here NaN) never enters an interpolation."""
+    n = 1000
+    bins = kernel_sample_bins(n, 0.02, 8, 40.0, 40.0)
+    x = np.arange(n) / n
+    exact = np.column_stack([x**k for k in range(6)] + [np.polyval([3, -1, 2, 0, -5, 1], x)])
+    samples = exact[bins]
+    samples[0] = np.nan
+    result = kernel_interpolation_matrix(bins, n) @ samples
+    assert np.all(np.isnan(result[0]))
+    np.testing.assert_array_equal(result[bins[1:]], exact[bins[1:]])
+    np.testing.assert_allclose(result[1:], exact[1:], rtol=0, atol=1e-12)
+
+
 # ---- decimation and outputs ------------------------------------------------------------
 def test_decimation_in_frequency_equals_sampling_at_the_output_rate():
     """The same band-limited load given at 1e-4 s (decimated ×25 inside) and at 2.5e-3 s
@@ -250,7 +291,17 @@ def test_outputs_have_the_documented_shapes_grids_and_spectra(paper_result):
     np.testing.assert_allclose(
         result.line_load_amplitude_N_per_m_per_hz, np.abs(load_spectrum[: f.size]), rtol=1e-12
     )
-    bins = np.array([1, 100, 2000])
+    # bins where the kernel is evaluated, the last included (the bins between are interpolated,
+    # tests/test_longterm.py)
+    sampled = kernel_sample_bins(
+        f.size,
+        f[1],
+        numerics.kernel_samples_per_cycle,
+        scenario.soil.s_wave_speed,
+        scenario.tunnel.ring_radius + numerics.max_depth,
+    )
+    bins = sampled[[1, sampled.size // 4, -1]]
+    assert bins[-1] == f.size - 1
     h = invert_receptance(f[bins], 0.0, scenario.tunnel, scenario.soil, numerics.n_harmonics)
     np.testing.assert_allclose(
         result.interface_amplitude_m_per_hz[bins], np.abs(h[:, 0] * load_spectrum[bins]), rtol=1e-12
