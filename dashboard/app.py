@@ -75,6 +75,10 @@ PLOT_STYLES = {"flex": "1 1 440px", "opacity": "1"}
 # A plot that a run will redraw is dimmed, not covered by Panel's animated loading spinner: the
 # spinner's animation cost the browser more than the redraw itself (1.4 s of CPU per change).
 STALE_PLOT_STYLES = {**PLOT_STYLES, "opacity": "0.45"}
+# The progress bar and status line follow a run at this interval: each refresh is a message to
+# the browser and a restyle there, competing with the run for the two cores (at 0.1 s a typed
+# speed on the paper case took ~0.3 s longer to show).
+PROGRESS_REFRESH_S = 0.25
 # The other model's run waits this long after the results are shown, and is skipped if the
 # user has changed an input by then: the chosen model's plots come first.
 COMPANION_DELAY_S = 0.5
@@ -532,7 +536,9 @@ class Dashboard(pn.viewable.Viewer):
         """Compute the requested runs, refreshing the progress bar meanwhile, then (unless a
         newer change is computing by then) the other tunnel–soil model's run for the depth
         plot."""
-        await self.runs.drain(self._start, self._finish, tick=self._show_progress)
+        await self.runs.drain(
+            self._start, self._finish, tick=self._show_progress, poll_s=PROGRESS_REFRESH_S
+        )
         if self._companion_wanted is None:
             return
         await asyncio.sleep(self.companion_delay_s)  # the page draws the results undisturbed
