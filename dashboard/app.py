@@ -13,6 +13,7 @@ URL query arguments choose the initial scenario: ``?preset=single_bogie`` and an
 from __future__ import annotations
 
 import asyncio
+import functools
 import html
 import io
 import logging
@@ -133,6 +134,26 @@ def _dynamic(spec: plots.PlotSpec, overlays, companions):
         return spec.draw(data)
 
     return callback
+
+
+def _one_message(*, new_models: bool = False):
+    """Decorate a page-updating method: its changes reach the browser as one message.
+
+    With ``new_models`` (the method may add Bokeh models, e.g. new plots), the document's
+    models are re-indexed once at the end instead of after each new model: each re-indexing
+    walks every model of the page. (Re-indexing costs the same when nothing was added, so
+    methods that only change values do without it.)
+    """
+
+    def decorate(method):
+        @functools.wraps(method)
+        def held(*args, **kwargs):
+            with pn.io.hold(freeze=new_models):
+                return method(*args, **kwargs)
+
+        return held
+
+    return decorate
 
 
 def _stage_name(stage: str) -> str:
@@ -548,6 +569,7 @@ class Dashboard(pn.viewable.Viewer):
         if other is not None and self.companion_runs.request(other):
             await self.companion_runs.drain(lambda scenario: None, self._finish_companion)
 
+    @_one_message()
     def _start(self, scenario: Scenario) -> None:
         """Mark the plots that this run will change as stale."""
         self._progress_state = ("", 0.0)
@@ -582,6 +604,7 @@ class Dashboard(pn.viewable.Viewer):
         """Pipeline progress callback (runs in a worker thread): just remember it."""
         self._progress_state = (stage, fraction)
 
+    @_one_message()
     def _show_progress(self) -> None:
         """Progress bar and status line from the last progress report."""
         stage, fraction = self._progress_state
@@ -608,9 +631,9 @@ class Dashboard(pn.viewable.Viewer):
         except (ValueError, SimulationError):
             return None
 
-    def _request_companion(self, results: Results) -> None:
-        """Ask for the other model's run of ``results``' scenario (unless it is on screen)."""
-        other = results.scenario
+    def _request_companion(self, other: Scenario) -> None:
+        """Ask for the other model's run of the scenario ``other`` (unless it is on screen); it
+        becomes that run's job, with the other tunnel–soil model."""
         other.tunnel.model = OTHER_MODEL[other.tunnel.model]
         self._companion_json = other.to_json()
         shown = self.other_model
@@ -621,6 +644,7 @@ class Dashboard(pn.viewable.Viewer):
         self._companion_wanted = other
         self.comparison_state = "computing"
 
+    @_one_message(new_models=True)
     def _finish_companion(self, other: Scenario, outcome: Results | None | BaseException):
         """Draw the other model's curve if it still belongs to the results on screen."""
         if isinstance(outcome, BaseException):
@@ -635,6 +659,7 @@ class Dashboard(pn.viewable.Viewer):
             stream.send(self.results)
         self.status.object = self._status_html(self.results)
 
+    @_one_message(new_models=True)
     def _finish(
         self,
         scenario: Scenario,
@@ -646,8 +671,11 @@ class Dashboard(pn.viewable.Viewer):
             self._show_failure(outcome)
             return
         results, self.fe_result = outcome
-        self._request_companion(results)
-        redrawn = self._stale_stages(results.scenario)
+        # ``scenario`` is this run's own copy of the inputs (``results.scenario`` would parse
+        # them again): it gives the stage keys, then becomes the other model's job
+        redrawn = self._stale_stages(scenario)
+        self._shown_keys = stage_keys(scenario)
+        self._request_companion(scenario)
         for spec in ALL_PLOTS:
             if spec.stage in redrawn:
                 stream = self.plot_streams.get(spec.key)
@@ -660,7 +688,6 @@ class Dashboard(pn.viewable.Viewer):
             self._mark_stale(spec.key, False)
         for stage in redrawn:
             self.render_counts[stage] += 1
-        self._shown_keys = stage_keys(results.scenario)
         self.results = results
         self.summary.object = items_html(plots.summary_items(results), "summary")
         self.warning_alert.param.update(
@@ -684,6 +711,7 @@ class Dashboard(pn.viewable.Viewer):
         """The other tunnel–soil model's results and the stored FE result, for the depth plot."""
         return {"other_model": self.other_model, "fe_result": self.fe_result}
 
+    @_one_message(new_models=True)
     def _redraw_overlays(self, _event=None) -> None:
         """The pinned runs changed: new passage plots (a plot's set of curves is fixed when
         it is first drawn)."""
@@ -750,7 +778,8 @@ def serve_session() -> Dashboard:
     )
     pn.state.onload(dashboard.refresh)
     pn.state.on_session_destroyed(lambda _context: dashboard.close())
-    dashboard.template().servable()
+    with pn.io.hold(freeze=True):  # the page's ~20 roots are indexed once, not each
+        dashboard.template().servable()
     return dashboard
 
 

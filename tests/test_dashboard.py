@@ -476,6 +476,27 @@ def test_a_comparison_run_of_older_inputs_is_not_drawn(dashboard):
     assert dashboard.other_model is shown
 
 
+def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeypatch):
+    """The results of a run change the page with the document's models re-indexed once (each
+    re-indexing walks every model of the page; unbatched it ran once per redrawn plot)."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()  # the first results create the plots
+        manager = type(session_doc.models)
+        recompute, indexings = manager.recompute, []
+
+        def counted(models):
+            indexings.append(1)
+            return recompute(models)
+
+        monkeypatch.setattr(manager, "recompute", counted)
+        board.scenario.train.speed_kmh += 5.0  # a run that redraws every plot
+    assert board.results.scenario.train.speed_kmh == cheap_scenario().train.speed_kmh + 5.0
+    assert len(indexings) <= 2  # the results, and the other model's curve after them
+
+
 def test_closing_a_session_drops_its_results(dashboard):
     dashboard.close()
     assert dashboard.results is None and not dashboard.plot_streams
