@@ -12,7 +12,8 @@ Prints, in one run (median and samples where repeated):
   A typed change is timed in the page, from the Enter key to the first frame painted with the
   new data (``performance.now()``), and also as the test driver sees it (its round trips
   included). Each starts once the page is idle, as it is when a user reads the results before
-  the next edit; the first speed change after opening the page is not counted.
+  the next edit. The first speed change after opening the page is shown apart (the browser
+  and the server do some one-off work on a figure's first update).
 * one ``paper`` page opened alone, then ten opened at once, until every plot of every page is
   drawn (target: ten ≤ 3 × one);
 * the server's resident memory before and after 20 more sessions have opened and closed
@@ -166,12 +167,12 @@ def typed_changes(browser, url: str, repeat: int) -> list[tuple[str, str, str, s
     wait_for_plots(page, timeout_ms=600_000)
     note("first page drawn")
     speed, soil = [], []
-    for i in range(repeat + 1):  # the first change after opening is not counted
+    for i in range(repeat + 1):  # the first change after opening is shown apart
         wait_until_idle(page)
         in_page, driver = timed_change(page, "train.speed_kmh", f"{70 + 2 * i}", STAGES)
-        if i:
-            speed.append((in_page, driver, pipeline_seconds(page)))
+        speed.append((in_page, driver, pipeline_seconds(page)))
         note(f"speed change {i}: {in_page:.2f} s in the page, {driver:.2f} s for the driver")
+    first, speed = speed[0], speed[1:]
     for i in range(repeat):
         wait_until_idle(page)
         in_page, driver = timed_change(page, "soil.youngs_modulus", f"{7 + i}", ("soil",))
@@ -189,6 +190,14 @@ def typed_changes(browser, url: str, repeat: int) -> list[tuple[str, str, str, s
         rows.append(("  pipeline's own time for that change", *spread(pipeline, " s"), ""))
     ratios = [b / p for b, _, p in speed]
     rows.append(("  speed: ratio in the page / pipeline", *spread(ratios), "≤ 1.5"))
+    rows.append(
+        (
+            "  first speed change after opening, in the page",
+            f"{first[0]:.2f} s",
+            f"pipeline {first[2]:.2f} s, ratio {first[0] / first[2]:.2f}",
+            "",
+        )
+    )
     return rows
 
 

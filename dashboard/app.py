@@ -80,6 +80,11 @@ STALE_PLOT_STYLES = {**PLOT_STYLES, "opacity": "0.45"}
 # the browser and a restyle there, competing with the run for the two cores (at 0.1 s a typed
 # speed on the paper case took ~0.3 s longer to show).
 PROGRESS_REFRESH_S = 0.25
+# The progress bar keeps its place while no run computes, hidden: showing and hiding it changed
+# the height above the plots, and the browser laid the whole main area out again twice per run
+# (0.3 s of CPU each time on the paper case, once after the results had arrived).
+PROGRESS_SHOWN = {"visibility": "visible"}
+PROGRESS_HIDDEN = {"visibility": "hidden"}
 # The other model's run waits this long after the results are shown, and is skipped if the
 # user has changed an input by then: the chosen model's plots come first.
 COMPANION_DELAY_S = 0.5
@@ -271,7 +276,7 @@ class Dashboard(pn.viewable.Viewer):
             value=0,
             max=100,
             active=False,
-            visible=False,
+            styles=PROGRESS_HIDDEN,
             sizing_mode="stretch_width",
             css_classes=["run-progress"],
         )
@@ -290,13 +295,18 @@ class Dashboard(pn.viewable.Viewer):
                 sizing_mode="stretch_width",
                 loading=True,
                 min_height=plots.PLOT_HEIGHT,
-                min_width=360,
+                min_width=plots.PLOT_MIN_WIDTH,
                 css_classes=["plot", f"plot-{spec.key}", f"stage-{spec.stage}"],
             )
             for spec in ALL_PLOTS
         }
         self.plot_cells = {
-            key: pn.Column(pane, styles=PLOT_STYLES, min_width=360, sizing_mode="stretch_width")
+            key: pn.Column(
+                pane,
+                styles=PLOT_STYLES,
+                min_width=plots.PLOT_MIN_WIDTH,
+                sizing_mode="stretch_width",
+            )
             for key, pane in self.plot_panes.items()
         }
         """Per plot, the box around its pane (flex item; dimmed while the plot is stale)."""
@@ -573,7 +583,7 @@ class Dashboard(pn.viewable.Viewer):
     def _start(self, scenario: Scenario) -> None:
         """Mark the plots that this run will change as stale."""
         self._progress_state = ("", 0.0)
-        self.progress.param.update(value=0, visible=True)
+        self.progress.param.update(value=0, styles=PROGRESS_SHOWN)
         if self.warm is not None and not self.warm.done():
             self.status.object = PREPARING
         stale = self._stale_stages(scenario)
@@ -590,6 +600,11 @@ class Dashboard(pn.viewable.Viewer):
             return
         pane.loading = False
         cell.styles = STALE_PLOT_STYLES if stale else PLOT_STYLES
+
+    @property
+    def progress_shown(self) -> bool:
+        """True while the progress bar shows a run computing."""
+        return self.progress.styles == PROGRESS_SHOWN
 
     def is_stale(self, key: str) -> bool:
         """True while the plot ``key`` waits for a run that will change it."""
@@ -666,7 +681,7 @@ class Dashboard(pn.viewable.Viewer):
         outcome: tuple[Results, FEResult | None] | BaseException,
     ) -> None:
         """Show a run's results (redrawing only the plots whose stage changed) or its error."""
-        self.progress.param.update(visible=False)
+        self.progress.styles = PROGRESS_HIDDEN
         if isinstance(outcome, BaseException):
             self._show_failure(outcome)
             return

@@ -32,12 +32,18 @@ PINNED_DISPLAY_POINTS = 1000
 
 MM, KN = 1e3, 1e-3  # m → mm, N → kN
 PLOT_HEIGHT = 300  # px
+PLOT_MIN_WIDTH = 360  # px: narrower, a plot wraps to a row of its own
 
 # Canvas, not HoloViews' default WebGL: a few thousand points draw fast either way, and WebGL
 # falls back to slow software rendering in browsers without a GPU (headless, remote desktops).
 PLOT_OPTIONS = {
     "responsive": True,
     "height": PLOT_HEIGHT,
+    # the same minimum size as the dashboard's plot pane gives the figure: HoloViews would
+    # otherwise clear it on the first update, and the browser would lay the whole page out
+    # again (1.2 s on the paper case's first change)
+    "min_height": PLOT_HEIGHT,
+    "min_width": PLOT_MIN_WIDTH,
     "tools": ["hover"],
     "show_grid": True,
     "framewise": True,

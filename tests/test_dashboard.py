@@ -269,7 +269,7 @@ def test_a_run_marks_only_the_plots_it_will_change_as_stale(dashboard):
     scenario = dashboard.scenario.copy()
     scenario.soil.density = 1900.0
     dashboard._start(scenario)
-    assert dashboard.progress.visible
+    assert dashboard.progress_shown
     for spec in plots.PLOTS:
         assert dashboard.is_stale(spec.key) == (spec.stage == "soil"), spec.key
     dashboard._note_progress("soil", 0.5)
@@ -294,7 +294,7 @@ def test_edits_during_a_run_give_one_more_run_with_the_newest_value(dashboard, m
     dashboard.controls["train.speed_kmh"].enter("90")
     assert speeds == [90.0, 93.0]
     assert dashboard.results.scenario.train.speed_kmh == 93.0
-    assert not dashboard.runs.busy and not dashboard.progress.visible
+    assert not dashboard.runs.busy and not dashboard.progress_shown
 
 
 @pytest.mark.parametrize("text", ["-5", "0", "abc", "6 kPa", ""])
