@@ -31,7 +31,7 @@ from dashboard import plots
 from dashboard.controls import ParameterControl
 from dashboard.export import ITEMS_CSS, items_html, report_html
 from dashboard.longterm_view import LONGTERM_PLOTS, CalibrationPanel, law_statement
-from dashboard.scheduler import EXECUTOR, LatestRun, warm_up, warm_up_run
+from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of, warm_up, warm_up_run
 from dashboard.study_view import StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
@@ -296,6 +296,10 @@ class Dashboard(pn.viewable.Viewer):
                 loading=True,
                 min_height=plots.PLOT_HEIGHT,
                 min_width=plots.PLOT_MIN_WIDTH,
+                # each plot's axes follow its own data: Panel would otherwise share the ranges
+                # of plots drawn in the same layout with the same dimension (both PSDs' "f",
+                # on slightly different frequency grids), cutting one of them off
+                linked_axes=False,
                 css_classes=["plot", f"plot-{spec.key}", f"stage-{spec.stage}"],
             )
             for spec in ALL_PLOTS
@@ -563,6 +567,23 @@ class Dashboard(pn.viewable.Viewer):
         else:
             asyncio.run(self._drain())
 
+    def show_cached_results(self) -> bool:
+        """Draw the scenario's results at once, without a run in the pool, when the stage
+        cache holds every stage of it (another visitor asked for the same inputs) and the
+        kernels are ready. Returns True when it did.
+
+        The served app calls it while it builds a page: the plots are then part of the page
+        the browser first receives, instead of replacing their placeholders once it has been
+        drawn (each replacement lays the whole page out again in the browser).
+        """
+        if self.warm is not None and not self.warm.done():
+            return False
+        if not self.cache.holds(stage_keys(self.scenario)):
+            return False
+        scenario = self.scenario.copy()
+        self._finish(scenario, outcome_of(self._compute, scenario))
+        return True
+
     async def _drain(self) -> None:
         """Compute the requested runs, refreshing the progress bar meanwhile, then (unless a
         newer change is computing by then) the other tunnel–soil model's run for the depth
@@ -791,7 +812,8 @@ def serve_session() -> Dashboard:
     dashboard = Dashboard.from_query(
         pn.state.session_args, cache=cache, warm=warm_up(warm_up_run), threaded=True
     )
-    pn.state.onload(dashboard.refresh)
+    dashboard.show_cached_results()
+    pn.state.onload(dashboard.refresh)  # computes what the cache lacks, and the comparison
     pn.state.on_session_destroyed(lambda _context: dashboard.close())
     with pn.io.hold(freeze=True):  # the page's ~20 roots are indexed once, not each
         dashboard.template().servable()

@@ -58,6 +58,15 @@ def warm_up_run() -> None:
         run(scenario, cache=None)
 
 
+def outcome_of(compute: Callable[[Job], Outcome], job: Job) -> Outcome | BaseException:
+    """``compute(job)``, with an exception returned instead of raised (to be shown, not
+    raised, by the caller)."""
+    try:
+        return compute(job)
+    except Exception as error:  # noqa: BLE001
+        return error
+
+
 class LatestRun(Generic[Job, Outcome]):
     """One session's runs: one computing at a time, and only the newest request waiting.
 
@@ -104,13 +113,6 @@ class LatestRun(Generic[Job, Outcome]):
             job, self._waiting, self._has_waiting = self._waiting, None, False
             return True, job
 
-    def _guarded(self, job: Job) -> Outcome | BaseException:
-        """``compute(job)``, with an exception returned instead of raised."""
-        try:
-            return self._compute(job)
-        except Exception as error:  # noqa: BLE001 (shown to the user by the caller)
-            return error
-
     async def drain(
         self,
         started: Callable[[Job], None],
@@ -129,7 +131,7 @@ class LatestRun(Generic[Job, Outcome]):
                 if not has_job:
                     return
                 started(job)
-                future = asyncio.wrap_future(self._executor.submit(self._guarded, job))
+                future = asyncio.wrap_future(self._executor.submit(outcome_of, self._compute, job))
                 while not future.done():
                     await asyncio.wait([future], timeout=poll_s)
                     if tick is not None:

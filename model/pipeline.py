@@ -194,6 +194,12 @@ class StageCache:
         while len(entries) > limit:
             entries.popitem(last=False)
 
+    def holds(self, keys: dict[str, str]) -> bool:
+        """True when the value of every stage for ``keys`` (:func:`stage_keys` of a scenario)
+        is stored, so that a run of that scenario returns at once (nothing counted)."""
+        with self._lock:
+            return all(keys[stage] in self._entries[stage] for stage in STAGES)
+
     def fetch(self, stage: str, key: str, compute: Callable[[], Any]) -> tuple[Any, bool]:
         """The cached value, or the one another thread is computing, or ``compute()`` stored.
 

@@ -9,6 +9,7 @@ import html
 import io
 import json
 import re
+from concurrent.futures import Future
 from types import SimpleNamespace
 
 import holoviews as hv
@@ -21,7 +22,7 @@ from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
-from dashboard.app import HIDDEN, PRIMARY, SWITCHES, Dashboard
+from dashboard.app import ALL_PLOTS, HIDDEN, PRIMARY, SWITCHES, Dashboard
 from dashboard.export import main as export_main
 from dashboard.export import package_version, report_html
 from dashboard.longterm_view import LONGTERM_PLOTS
@@ -474,6 +475,28 @@ def test_a_comparison_run_of_older_inputs_is_not_drawn(dashboard):
     stale = dashboard.results  # a Results of another scenario than the expected comparison
     dashboard._finish_companion(stale.scenario, stale)
     assert dashboard.other_model is shown
+
+
+def test_a_page_of_cached_inputs_is_drawn_before_it_is_sent(cache, cheap_scenario):
+    """Inputs another visitor has computed are drawn while the page is built (no run in the
+    pool); others, or kernels still compiling, wait for the page's own run."""
+    run(cheap_scenario(), cache=cache)
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    assert board.show_cached_results()
+    assert set(board.plot_streams) == {spec.key for spec in ALL_PLOTS}
+    assert board.results.scenario.to_dict() == cheap_scenario().to_dict()
+    assert not board.runs.busy and not any(board.is_stale(key) for key in board.plot_panes)
+
+    other = cheap_scenario()
+    other.train.speed_kmh = 77.0
+    fresh = Dashboard(scenario=other, preset="single_bogie", cache=cache)
+    assert not fresh.show_cached_results() and fresh.results is None
+
+    compiling = Future()  # the server's warm-up run, not finished
+    waiting = Dashboard(
+        scenario=cheap_scenario(), preset="single_bogie", cache=cache, warm=compiling
+    )
+    assert not waiting.show_cached_results() and waiting.results is None
 
 
 def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeypatch):

@@ -92,6 +92,18 @@ def test_cache_serves_exactly_the_stages_a_change_does_not_touch(cheap_scenario)
     }  # fmt: skip
 
 
+def test_cache_holds_a_scenario_once_every_stage_of_it_is_stored(cheap_scenario):
+    cache = StageCache()
+    scenario = cheap_scenario()
+    assert not cache.holds(pipeline.stage_keys(scenario))
+    run(scenario, cache=cache)
+    hits, misses = dict(cache.hits), dict(cache.misses)
+    assert cache.holds(pipeline.stage_keys(scenario))
+    assert (cache.hits, cache.misses) == (hits, misses)  # asking counts nothing
+    scenario.soil.youngs_modulus = 12e6  # its vehicle–track and load stages are stored
+    assert not cache.holds(pipeline.stage_keys(scenario))
+
+
 def test_a_new_load_on_the_same_record_grid_reuses_the_soil_transfer_bit_for_bit(
     cheap_scenario,
 ):
