@@ -83,8 +83,8 @@ PROGRESS_REFRESH_S = 0.25
 # The progress bar keeps its place while no run computes, hidden: showing and hiding it changed
 # the height above the plots, and the browser laid the whole main area out again twice per run
 # (0.3 s of CPU each time on the paper case, once after the results had arrived).
-PROGRESS_SHOWN = {"visibility": "visible"}
-PROGRESS_HIDDEN = {"visibility": "hidden"}
+PROGRESS_SHOWN = {"opacity": "1"}
+PROGRESS_HIDDEN = {"opacity": "0"}
 # The other model's run waits this long after the results are shown, and is skipped if the
 # user has changed an input by then: the chosen model's plots come first.
 COMPANION_DELAY_S = 0.5
@@ -141,19 +141,19 @@ def _dynamic(spec: plots.PlotSpec, overlays, companions):
     return callback
 
 
-def _one_message(*, new_models: bool = False):
+def _one_message(*, reindex_once: bool = False):
     """Decorate a page-updating method: its changes reach the browser as one message.
 
-    With ``new_models`` (the method may add Bokeh models, e.g. new plots), the document's
-    models are re-indexed once at the end instead of after each new model: each re-indexing
-    walks every model of the page. (Re-indexing costs the same when nothing was added, so
-    methods that only change values do without it.)
+    With ``reindex_once`` the document's models are re-indexed once at the end instead of
+    after each change of a model reference (each re-indexing walks every model of the page).
+    Only for methods that update existing plots: a plot made while the index is frozen misses
+    the page design's Bokeh theme (its title came out small).
     """
 
     def decorate(method):
         @functools.wraps(method)
         def held(*args, **kwargs):
-            with pn.io.hold(freeze=new_models):
+            with pn.io.hold(freeze=reindex_once):
                 return method(*args, **kwargs)
 
         return held
@@ -276,9 +276,13 @@ class Dashboard(pn.viewable.Viewer):
             value=0,
             max=100,
             active=False,
-            styles=PROGRESS_HIDDEN,
+            height=8,  # a thin bar: its place stays reserved while no run computes
             sizing_mode="stretch_width",
             css_classes=["run-progress"],
+        )
+        # shown and hidden through its box: the bar itself keeps the styles it was built with
+        self.progress_box = pn.Column(
+            self.progress, styles=PROGRESS_HIDDEN, margin=(6, 0, 0, 0), sizing_mode="stretch_width"
         )
         self.status = pn.pane.HTML("", css_classes=["run-status"], sizing_mode="stretch_width")
         self.summary = pn.pane.HTML(
@@ -435,7 +439,7 @@ class Dashboard(pn.viewable.Viewer):
         """Main area: run status and messages above the tabs of views."""
         return [
             pn.Column(
-                self.progress,
+                self.progress_box,
                 self.status,
                 self.error_alert,
                 self.warning_alert,
@@ -604,7 +608,8 @@ class Dashboard(pn.viewable.Viewer):
     def _start(self, scenario: Scenario) -> None:
         """Mark the plots that this run will change as stale."""
         self._progress_state = ("", 0.0)
-        self.progress.param.update(value=0, styles=PROGRESS_SHOWN)
+        self.progress.value = 0
+        self.progress_box.styles = PROGRESS_SHOWN
         if self.warm is not None and not self.warm.done():
             self.status.object = PREPARING
         stale = self._stale_stages(scenario)
@@ -625,7 +630,7 @@ class Dashboard(pn.viewable.Viewer):
     @property
     def progress_shown(self) -> bool:
         """True while the progress bar shows a run computing."""
-        return self.progress.styles == PROGRESS_SHOWN
+        return self.progress_box.styles == PROGRESS_SHOWN
 
     def is_stale(self, key: str) -> bool:
         """True while the plot ``key`` waits for a run that will change it."""
@@ -680,7 +685,7 @@ class Dashboard(pn.viewable.Viewer):
         self._companion_wanted = other
         self.comparison_state = "computing"
 
-    @_one_message(new_models=True)
+    @_one_message(reindex_once=True)
     def _finish_companion(self, other: Scenario, outcome: Results | None | BaseException):
         """Draw the other model's curve if it still belongs to the results on screen."""
         if isinstance(outcome, BaseException):
@@ -695,14 +700,25 @@ class Dashboard(pn.viewable.Viewer):
             stream.send(self.results)
         self.status.object = self._status_html(self.results)
 
-    @_one_message(new_models=True)
     def _finish(
         self,
         scenario: Scenario,
         outcome: tuple[Results, FEResult | None] | BaseException,
     ) -> None:
-        """Show a run's results (redrawing only the plots whose stage changed) or its error."""
-        self.progress.styles = PROGRESS_HIDDEN
+        """Show a run's results (redrawing only the plots whose stage changed) or its error, in
+        one message; the models are re-indexed once when every plot exists already (see
+        :func:`_one_message`)."""
+        in_place = len(self.plot_streams) == len(ALL_PLOTS)
+        with pn.io.hold(freeze=in_place):
+            self._show_outcome(scenario, outcome)
+
+    def _show_outcome(
+        self,
+        scenario: Scenario,
+        outcome: tuple[Results, FEResult | None] | BaseException,
+    ) -> None:
+        """:meth:`_finish` without the message batching."""
+        self.progress_box.styles = PROGRESS_HIDDEN
         if isinstance(outcome, BaseException):
             self._show_failure(outcome)
             return
@@ -747,7 +763,7 @@ class Dashboard(pn.viewable.Viewer):
         """The other tunnel–soil model's results and the stored FE result, for the depth plot."""
         return {"other_model": self.other_model, "fe_result": self.fe_result}
 
-    @_one_message(new_models=True)
+    @_one_message()
     def _redraw_overlays(self, _event=None) -> None:
         """The pinned runs changed: new passage plots (a plot's set of curves is fixed when
         it is first drawn)."""

@@ -477,6 +477,30 @@ def test_rejected_values_leave_the_slider_range_alone(page):
     assert render_counts(page) == dict.fromkeys(STAGES, 1)
 
 
+TITLE_SIZES_JS = """() => {
+  const sizes = {};
+  for (const doc of window.Bokeh.documents)
+    for (const model of doc.all_models)
+      if (model.type === "Figure") sizes[model.title.text] = model.title.text_font_size;
+  return sizes;
+}"""
+
+
+def test_plots_keep_the_page_design_whether_computed_or_served_from_the_cache(browser, app_url):
+    """The page design's theme (12 pt plot titles) reaches the plots of a page whose run is
+    computed after it opens and of one served from the cache (plots drawn before it is sent).
+    The defect: plots made while Bokeh's model index was frozen showed Bokeh's default 13 px."""
+    query = f"{CHEAP_QUERY}&soil.youngs_modulus=6100000"  # inputs no other test computes
+    for served_from_the_cache in (False, True):
+        context = browser.new_context(viewport={"width": 1400, "height": 1000})
+        page = context.new_page()
+        open_dashboard(page, app_url, query)
+        sizes = page.evaluate(TITLE_SIZES_JS)
+        assert set(sizes) >= set(PLOT_TITLES), served_from_the_cache
+        assert set(sizes.values()) == {"12pt"}, (served_from_the_cache, sizes)
+        context.close()
+
+
 def test_two_sessions_computing_at_once_both_finish_with_their_own_numbers(browser, app_url):
     """Two users change the speed at the same moment; each page ends with the numbers of its
     own speed, equal to those of a page opened directly at that speed."""
