@@ -123,8 +123,14 @@ def heat_map(bands: pd.DataFrame, path_x: str, path_y: str, key: str) -> hv.Heat
         hv.Dimension("p95", label="95 %", unit="mm"),
     ]
     options = {k: v for k, v in PLOT_OPTIONS.items() if k != "show_grid"}
+    # the title names the quantity: the colour bar's own label stays short enough for the
+    # plot's height (the whole dimension label was cut off, unit included)
     return hv.HeatMap(data, kdims=kdims, vdims=vdims).opts(
-        **options, colorbar=True, cmap="viridis", title=f"{RESULTS[key]}, mean of seeds"
+        **options,
+        colorbar=True,
+        clabel="Mean (mm)",
+        cmap="viridis",
+        title=f"{RESULTS[key]}, mean of seeds",
     )
 
 

@@ -173,6 +173,10 @@ def test_two_parameter_study_draws_a_heat_map(view):
     heat = view.plots.objects[0].object[()]
     assert isinstance(heat, hv.HeatMap)
     assert len(heat) == 4
+    # the colour bar's label fits the plot's height and keeps the unit (the dimension's long
+    # label was cut off)
+    colour_bar_label = heat.opts.get("plot").kwargs["clabel"]
+    assert colour_bar_label.endswith("(mm)") and len(colour_bar_label) <= 12
     assert sorted(set(view.table["soil.youngs_modulus"])) == [5e6, 1e7]
     bands = aggregate(view.table)
     np.testing.assert_array_equal(
