@@ -564,8 +564,13 @@ class Dashboard(pn.viewable.Viewer):
         A change made while a run computes replaces any change still waiting, so dragging or
         typing never queues stale runs.
         """
-        if not self.runs.request(self.scenario.copy()):
-            return
+        if self.runs.request(self.scenario.copy()):
+            self.compute_waiting()
+
+    def compute_waiting(self) -> None:
+        """Compute what waits, without requesting a run: the requested runs, then the other
+        tunnel–soil model's curve for the depth plot (all there is after
+        :meth:`show_cached_results`)."""
         if self.threaded:
             pn.state.execute(self._drain)
         else:
@@ -578,7 +583,8 @@ class Dashboard(pn.viewable.Viewer):
 
         The served app calls it while it builds a page: the plots are then part of the page
         the browser first receives, instead of replacing their placeholders once it has been
-        drawn (each replacement lays the whole page out again in the browser).
+        drawn (each replacement lays the whole page out again in the browser). Only the other
+        model's curve is left to compute (:meth:`compute_waiting`).
         """
         if self.warm is not None and not self.warm.done():
             return False
@@ -828,8 +834,9 @@ def serve_session() -> Dashboard:
     dashboard = Dashboard.from_query(
         pn.state.session_args, cache=cache, warm=warm_up(warm_up_run), threaded=True
     )
-    dashboard.show_cached_results()
-    pn.state.onload(dashboard.refresh)  # computes what the cache lacks, and the comparison
+    # once the page is loaded: its own run, or (drawn from the cache) only the comparison curve
+    drawn = dashboard.show_cached_results()
+    pn.state.onload(dashboard.compute_waiting if drawn else dashboard.refresh)
     pn.state.on_session_destroyed(lambda _context: dashboard.close())
     with pn.io.hold(freeze=True):  # the page's ~20 roots are indexed once, not each
         dashboard.template().servable()

@@ -486,6 +486,10 @@ def test_a_page_of_cached_inputs_is_drawn_before_it_is_sent(cache, cheap_scenari
     assert set(board.plot_streams) == {spec.key for spec in ALL_PLOTS}
     assert board.results.scenario.to_dict() == cheap_scenario().to_dict()
     assert not board.runs.busy and not any(board.is_stale(key) for key in board.plot_panes)
+    counts, hits = dict(board.render_counts), dict(cache.hits)
+    board.compute_waiting()  # what the page does once loaded: only the comparison curve
+    assert board.comparison_state == "shown" and board.render_counts == counts
+    assert cache.hits["vehicle_track"] == hits["vehicle_track"] + 1  # the other model's run
 
     other = cheap_scenario()
     other.train.speed_kmh = 77.0
