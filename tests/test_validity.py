@@ -418,7 +418,8 @@ def test_docs_table_lists_every_bound_as_declared():
     """docs/validity.md has one 'bound' row per bounded number, with the declared range."""
     from pathlib import Path
 
-    from model.params import SECTIONS, Count, Quantity, _format_range
+    from model.params import SECTIONS, Count, Quantity
+    from model.params.quantities import _format_range
 
     text = (Path(__file__).resolve().parent.parent / "docs" / "validity.md").read_text()
     rows = {
