@@ -40,7 +40,7 @@ from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail
 from model.spectra import one_sided_psd
-from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
+from model.track.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
 N_RAILS = 2  # both rails load the same tunnel section (docs/model.md §6)
 # invariant_warnings: growth of the peak with depth tolerated, relative to the invert peak (the

@@ -44,7 +44,7 @@ import param
 
 from model.params import SECTIONS, Scenario
 from model.pipeline import StageCache, run
-from model.vehicle_track import check_inputs
+from model.track.vehicle_track import check_inputs
 
 SCHEDULER_ENV = "TUNNELSETTLE_SCHEDULER"
 """Environment variable with the address of an existing Dask scheduler to use by default."""

@@ -264,7 +264,7 @@ def test_inconsistent_scenario_is_refused_before_any_computation(cheap_scenario)
 def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch, cheap_scenario):
     """Δt = 2.5e-4 s is beyond the explicit limit; with the input check bypassed the run
     diverges, and the pipeline refuses to feed a truncated record to the soil stage."""
-    from model import vehicle_track
+    from model.track import vehicle_track
 
     scenario = cheap_scenario()
     scenario.numerics.dt = 2.5e-4

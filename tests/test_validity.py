@@ -338,7 +338,7 @@ def test_9_the_message_names_the_parameter_at_fault(path, value):
 )
 def test_9_the_stability_refusal_names_the_part_that_sets_the_limit(path, value, named):
     """It used to name the rail modes whatever set the limit (a stiff pad, a damper...)."""
-    from model.vehicle_track import check_inputs
+    from model.track.vehicle_track import check_inputs
 
     scenario = Scenario.preset("single_bogie")
     scenario.set_value(path, value)
@@ -382,7 +382,7 @@ def test_10_non_utf8_files_are_named_errors(tmp_path):
 
 
 def test_10_a_profile_csv_with_a_bom_loads(tmp_path):
-    from model.irregularity import load_profile_csv
+    from model.track.irregularity import load_profile_csv
 
     path = tmp_path / "bom.csv"
     path.write_bytes(b"\xef\xbb\xbfx_m,eta_mm\n0,1\n1,2\n")

@@ -20,7 +20,7 @@ class Numerics(param.Parameterized):
         (2e-5, 2e-4),
         "Time step Δt (s)",
         "Time step Δt of Zhai's explicit integrator (paper default 1e-4 s), in "
-        "model.vehicle_track.simulate; must be below stable_time_step (check_inputs). Bounds "
+        "model.track.vehicle_track.simulate; must be below stable_time_step (check_inputs). Bounds "
         "1 µs–1 ms: finer steps only cost time, coarser ones are never stable for a rail on "
         "blocks.",
     )
@@ -30,7 +30,7 @@ class Numerics(param.Parameterized):
         softbounds=(50, 2000),
         allow_None=True,
         label="Rail modes",
-        doc="Modes N_m of the simply supported rail, in model.vehicle_track.assemble_track; "
+        doc="Modes N_m of the simply supported rail, in model.track.assembly.assemble_track; "
         "None means L/L_s (shortest modal half-wavelength = block spacing, docs/model.md §2). "
         "Bounds 1–20000; Scenario.validate requires N_m ≥ L/(2L_s).",
     )

@@ -17,7 +17,7 @@ class Track(param.Parameterized):
     """Elastic supporting-block ballastless track, one rail.
 
     The paper's Table 2 is missing; defaults are typical Chinese-metro values (docs/model.md §2):
-    60 kg/m rail, 0.6 m block spacing. Used by ``model.vehicle_track.assemble_track`` and
+    60 kg/m rail, 0.6 m block spacing. Used by ``model.track.assembly.assemble_track`` and
     ``stable_time_step``; the Winkler values by ``winkler_block_displacement``.
     """
 
@@ -27,7 +27,7 @@ class Track(param.Parameterized):
         (1.9e11, 2.2e11),
         "Rail Young's modulus (Pa)",
         "Young's modulus of rail steel, E (assumed, docs/model.md §2), in the modal rail of "
-        "model.vehicle_track.assemble_track (EI). Bounds 150–250 GPa: rail steels.",
+        "model.track.assembly.assemble_track (EI). Bounds 150–250 GPa: rail steels.",
     )
     rail_I = _q(
         3.217e-5,
@@ -35,7 +35,7 @@ class Track(param.Parameterized):
         (1e-5, 6e-5),
         "Rail second moment of area (m⁴)",
         "Vertical-bending second moment of area of the rail, I (60 kg/m rail, assumed), in "
-        "model.vehicle_track.assemble_track (EI). Bounds 5e-6–1e-4 m⁴: light 30 kg/m rails to "
+        "model.track.assembly.assemble_track (EI). Bounds 5e-6–1e-4 m⁴: light 30 kg/m rails to "
         "beyond the 75 kg/m rail.",
     )
     rail_mass = _q(
@@ -43,7 +43,7 @@ class Track(param.Parameterized):
         (20.0, 120.0),
         (40.0, 80.0),
         "Rail mass per length (kg/m)",
-        "Mass per metre of the rail, m_r (assumed), in model.vehicle_track.assemble_track. "
+        "Mass per metre of the rail, m_r (assumed), in model.track.assembly.assemble_track. "
         "Bounds 20–120 kg/m: light rails to heavy rails with fittings.",
     )
     block_spacing = _q(
@@ -52,7 +52,7 @@ class Track(param.Parameterized):
         (0.5, 0.75),
         "Block spacing (m)",
         "Distance between supporting blocks, L_s (assumed), in "
-        "model.vehicle_track.assemble_track, Scenario.rail_length and the line load "
+        "model.track.assembly.assemble_track, Scenario.rail_length and the line load "
         "model.pipeline.invert_line_load. Bounds 0.3–1.5 m: the discretely supported rail "
         "needs several supports per wheel-load spread; real spacings are 0.5–0.75 m.",
     )
@@ -62,7 +62,7 @@ class Track(param.Parameterized):
         (1e7, 2e8),
         "Fastener stiffness (N/m)",
         "Rail pad / fastener stiffness per block, K_r (assumed), in "
-        "model.vehicle_track.assemble_track. Bounds 1 MN/m–10 GN/m: the softest resilient "
+        "model.track.assembly.assemble_track. Bounds 1 MN/m–10 GN/m: the softest resilient "
         "fasteners to a practically rigid pad.",
     )
     fastener_damping = _q(
@@ -71,7 +71,7 @@ class Track(param.Parameterized):
         (0.0, 2e5),
         "Fastener damping (N·s/m)",
         "Rail pad / fastener damping per block, C_r (assumed), in "
-        "model.vehicle_track.assemble_track. Bounds 0–1 MN·s/m: undamped to five times the "
+        "model.track.assembly.assemble_track. Bounds 0–1 MN·s/m: undamped to five times the "
         "stiffest published pads.",
     )
     pad_stiffness = _q(
@@ -80,7 +80,7 @@ class Track(param.Parameterized):
         (5e6, 1.5e8),
         "Block pad stiffness (N/m)",
         "Block pad + rubber boot stiffness per block, K_s (assumed), in "
-        "model.vehicle_track.assemble_track; the invert force K_s Z_s + C_s Ż_s. Bounds "
+        "model.track.assembly.assemble_track; the invert force K_s Z_s + C_s Ż_s. Bounds "
         "1 MN/m–10 GN/m: soft boots to a practically rigid support.",
     )
     pad_damping = _q(
@@ -89,7 +89,7 @@ class Track(param.Parameterized):
         (0.0, 3e5),
         "Block pad damping (N·s/m)",
         "Block pad + rubber boot damping per block, C_s (assumed), in "
-        "model.vehicle_track.assemble_track and the invert force. Bounds 0–1 MN·s/m: undamped to "
+        "model.track.assembly.assemble_track and the invert force. Bounds 0–1 MN·s/m: undamped to "
         "five times the most damped published boots.",
     )
     block_mass = _q(
@@ -98,7 +98,7 @@ class Track(param.Parameterized):
         (50.0, 300.0),
         "Block mass (kg)",
         "Mass of one supporting block on one rail, M_s (assumed), in "
-        "model.vehicle_track.assemble_track. Bounds 10–1000 kg: a base plate to a floating "
+        "model.track.assembly.assemble_track. Bounds 10–1000 kg: a base plate to a floating "
         "slab segment per rail seat.",
     )
     wheel_radius = _q(
@@ -107,7 +107,7 @@ class Track(param.Parameterized):
         (0.35, 0.5),
         "Wheel radius (m)",
         "Rolling radius of the wheel, R (assumed), in Track.hertz_constant (used by the "
-        "model.vehicle_track kernel). Bounds 0.25–0.6 m: where Zhai's Hertz fits G(R) were "
+        "model.track.vehicle_track kernel). Bounds 0.25–0.6 m: where Zhai's Hertz fits G(R) were "
         "made (wheel diameters 0.5–1.2 m).",
     )
 
@@ -116,7 +116,7 @@ class Track(param.Parameterized):
         objects=list(HERTZ_FITS),
         label="Wheel tread",
         doc="Tread profile for the Hertz constant G of Track.hertz_constant (the contact law of "
-        "the model.vehicle_track kernel): conical G = 4.57 R^-0.149e-8, worn "
+        "the model.track.vehicle_track kernel): conical G = 4.57 R^-0.149e-8, worn "
         "G = 3.86 R^-0.115e-8 (paper §2.3, docs/model.md §3).",
     )
 
@@ -158,20 +158,20 @@ class Track(param.Parameterized):
 class Irregularity(param.Parameterized):
     """Vertical rail-profile irregularity: US FRA PSD, trigonometric-series synthesis (§2.4).
 
-    Used by ``model.irregularity.profile_for`` (called from ``model.vehicle_track``).
+    Used by ``model.track.irregularity.profile_for`` (called from ``model.track.vehicle_track``).
     """
 
     enabled = param.Boolean(
         True,
         label="Irregularity on",
-        doc="If false, the rail is perfectly smooth (model.irregularity.profile_for).",
+        doc="If false, the rail is perfectly smooth (model.track.irregularity.profile_for).",
     )
     track_class = Count(
         6,
         bounds=(1, 6),
         softbounds=(1, 6),
         label="FRA track class",
-        doc="US FRA track class 1–6 (A_v of fra_psd in model.irregularity); 6 is the best "
+        doc="US FRA track class 1–6 (A_v of fra_psd in model.track.irregularity); 6 is the best "
         "track and the paper's choice. Bounds: the classes the FRA defines.",
     )
     seed = Count(
@@ -179,7 +179,7 @@ class Irregularity(param.Parameterized):
         bounds=(0, 2**32 - 1),
         softbounds=(0, 9999),
         label="Random seed",
-        doc="Seed of the random phases φ_k of model.irregularity.synthesize_profile. Bounds: "
+        doc="Seed of the random phases φ_k of model.track.irregularity.synthesize_profile. Bounds: "
         "NumPy's 32-bit seed range.",
     )
     wavelength_min = _q(
@@ -188,8 +188,8 @@ class Irregularity(param.Parameterized):
         (0.5, 10.0),
         "Shortest wavelength (m)",
         "Lower end λ_min of the synthesised band (docs/model.md §4: 1 m), in "
-        "model.irregularity.series_wavenumbers; sets the profile grid step λ_min/100 in "
-        "model.vehicle_track. Bounds 0.1–100 m: shorter waves are corrugation, outside the "
+        "model.track.irregularity.series_wavenumbers; sets the profile grid step λ_min/100 in "
+        "model.track.vehicle_track. Bounds 0.1–100 m: shorter waves are corrugation, outside the "
         "FRA fit; must be below wavelength_max (Scenario.validate).",
     )
     wavelength_max = _q(
@@ -198,7 +198,7 @@ class Irregularity(param.Parameterized):
         (10.0, 120.0),
         "Longest wavelength (m)",
         "Upper end λ_max of the synthesised band (docs/model.md §4: 50 m), in "
-        "model.irregularity.series_wavenumbers. Bounds 0.5–1000 m: beyond, the waves are "
+        "model.track.irregularity.series_wavenumbers. Bounds 0.5–1000 m: beyond, the waves are "
         "alignment design, not irregularity.",
     )
     n_components = Count(
@@ -206,7 +206,7 @@ class Irregularity(param.Parameterized):
         bounds=(10, 200000),
         softbounds=(200, 10000),
         label="Harmonic components",
-        doc="Number of cosines N_k in model.irregularity.synthesize_profile. Bounds 10–2e5: "
+        doc="Number of cosines N_k in model.track.irregularity.synthesize_profile. Bounds 10–2e5: "
         "the cost grows as N_k × profile points (see the run-cost guard).",
     )
     profile_csv = param.String(
@@ -214,7 +214,7 @@ class Irregularity(param.Parameterized):
         allow_None=True,
         label="Measured profile CSV",
         doc="Path of a measured profile (columns x in m measured from the monitored block, η in "
-        "m or mm), read by model.irregularity.load_profile_csv; replaces the synthetic profile "
-        "when set. A relative path in a scenario file is resolved against that file's folder "
-        "(Scenario.from_file).",
+        "m or mm), read by model.track.irregularity.load_profile_csv; replaces the synthetic "
+        "profile when set. A relative path in a scenario file is resolved against that file's "
+        "folder (Scenario.from_file).",
     )

@@ -11,7 +11,7 @@ class Vehicle(param.Parameterized):
     """Metro car: masses and suspensions of one whole car (paper Table 1).
 
     The one-rail model halves every mass and inertia; suspension values are per side. All are
-    used by ``model.vehicle_track.assemble_vehicle`` (and so by ``stable_time_step``). Hard
+    used by ``model.track.assembly.assemble_vehicle`` (and so by ``stable_time_step``). Hard
     bounds span rail vehicles from a light tram to a loaded heavy-rail car; outside them the
     one-rail linear-suspension model and its explicit time step lose their meaning.
     """
@@ -21,7 +21,7 @@ class Vehicle(param.Parameterized):
         (5000.0, 120000.0),
         (20000.0, 60000.0),
         "Car body mass (kg)",
-        "Mass of one car body, M_c (paper Table 1), in model.vehicle_track.assemble_vehicle "
+        "Mass of one car body, M_c (paper Table 1), in model.track.assembly.assemble_vehicle "
         "and Vehicle.static_wheel_load. Bounds 5–120 t: a light tram body to a fully loaded "
         "heavy-rail car body.",
     )
@@ -30,7 +30,7 @@ class Vehicle(param.Parameterized):
         (1e4, 1e8),
         (5e5, 3e6),
         "Car body pitch inertia (kg·m²)",
-        "Pitch inertia of one car body, J_c, in model.vehicle_track.assemble_vehicle. The paper "
+        "Pitch inertia of one car body, J_c, in model.track.assembly.assemble_vehicle. The paper "
         "does not give it; None means M_c·L_car²/12 (uniform slender body, docs/model.md §1). "
         "Bounds 1e4–1e8 kg·m²: M_c L²/12 over the mass and length bounds.",
         allow_none=True,
@@ -40,7 +40,7 @@ class Vehicle(param.Parameterized):
         (500.0, 10000.0),
         (1500.0, 5000.0),
         "Bogie frame mass (kg)",
-        "Mass of one bogie frame, M_t (paper Table 1), in model.vehicle_track.assemble_vehicle. "
+        "Mass of one bogie frame, M_t (paper Table 1), in model.track.assembly.assemble_vehicle. "
         "Bounds 0.5–10 t: tram to heavy freight bogie frames.",
     )
     bogie_pitch_inertia = _q(
@@ -49,7 +49,7 @@ class Vehicle(param.Parameterized):
         (1000.0, 8000.0),
         "Bogie pitch inertia (kg·m²)",
         "Pitch inertia of one bogie frame, J_t (paper Table 1), in "
-        "model.vehicle_track.assemble_vehicle. Bounds 100–5e4 kg·m²: M_t l² over the bogie "
+        "model.track.assembly.assemble_vehicle. Bounds 100–5e4 kg·m²: M_t l² over the bogie "
         "masses and wheelbases.",
     )
     wheelset_mass = _q(
@@ -57,7 +57,7 @@ class Vehicle(param.Parameterized):
         (300.0, 5000.0),
         (800.0, 2500.0),
         "Wheelset mass (kg)",
-        "Mass of one wheelset, M_w (paper Table 1), in model.vehicle_track.assemble_vehicle "
+        "Mass of one wheelset, M_w (paper Table 1), in model.track.assembly.assemble_vehicle "
         "and the Hertz term of stable_time_step. Bounds 0.3–5 t: light tram to powered "
         "heavy-haul wheelsets.",
     )
@@ -67,7 +67,7 @@ class Vehicle(param.Parameterized):
         (5e5, 5e6),
         "Primary suspension stiffness (N/m)",
         "Primary suspension stiffness per axle box, K_pz (paper Table 1), in "
-        "model.vehicle_track.assemble_vehicle. Bounds 0.1–100 MN/m: soft rubber springs to a "
+        "model.track.assembly.assemble_vehicle. Bounds 0.1–100 MN/m: soft rubber springs to a "
         "nearly rigid axle box.",
     )
     primary_damping = _q(
@@ -76,7 +76,7 @@ class Vehicle(param.Parameterized):
         (0.0, 2e5),
         "Primary suspension damping (N·s/m)",
         "Primary suspension damping per axle box, C_pz (paper Table 1), in "
-        "model.vehicle_track.assemble_vehicle. Bounds 0–1 MN·s/m: undamped to ten times the "
+        "model.track.assembly.assemble_vehicle. Bounds 0–1 MN·s/m: undamped to ten times the "
         "heaviest hydraulic dampers.",
     )
     secondary_stiffness = _q(
@@ -85,7 +85,7 @@ class Vehicle(param.Parameterized):
         (2e5, 5e6),
         "Secondary suspension stiffness (N/m)",
         "Secondary suspension stiffness per bogie side, K_sz (paper Table 1), in "
-        "model.vehicle_track.assemble_vehicle. Bounds 0.1–100 MN/m: air springs to stiff "
+        "model.track.assembly.assemble_vehicle. Bounds 0.1–100 MN/m: air springs to stiff "
         "freight springs.",
     )
     secondary_damping = _q(
@@ -94,7 +94,7 @@ class Vehicle(param.Parameterized):
         (0.0, 5e5),
         "Secondary suspension damping (N·s/m)",
         "Secondary suspension damping per bogie side, C_sz (paper Table 1), in "
-        "model.vehicle_track.assemble_vehicle. Bounds 0–2 MN·s/m: undamped to ten times the "
+        "model.track.assembly.assemble_vehicle. Bounds 0–2 MN·s/m: undamped to ten times the "
         "paper's value.",
     )
 
@@ -108,7 +108,7 @@ class Vehicle(param.Parameterized):
 class Train(param.Parameterized):
     """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A (docs/model.md §1).
 
-    Used by ``Train.axle_offsets`` (wheel positions in model.vehicle_track) and
+    Used by ``Train.axle_offsets`` (wheel positions in model.track.vehicle_track) and
     ``Scenario.passage_duration``.
     """
 
@@ -125,7 +125,7 @@ class Train(param.Parameterized):
         (1.0, 400.0),
         (20.0, 160.0),
         "Speed (km/h)",
-        "Train speed v (paper §4.1: 80 km/h), in model.vehicle_track (wheel positions) and "
+        "Train speed v (paper §4.1: 80 km/h), in model.track.vehicle_track (wheel positions) and "
         "Scenario.passage_duration. Bounds 1–400 km/h: the record lasts ∝ 1/v (a crawl would "
         "need millions of steps) and 400 km/h is the fastest rail service.",
     )
@@ -144,7 +144,7 @@ class Train(param.Parameterized):
         (8.0, 20.0),
         "Bogie-centre distance (m)",
         "Distance between the two bogie centres of a car, 2l_c (15.7 m for Type A), in "
-        "Train.axle_offsets and model.vehicle_track.assemble_vehicle. Bounds 2–50 m; with "
+        "Train.axle_offsets and model.track.assembly.assemble_vehicle. Bounds 2–50 m; with "
         "Scenario.validate: 2l_c + wheelbase < L_car.",
     )
     wheelbase = _q(
@@ -153,7 +153,7 @@ class Train(param.Parameterized):
         (1.8, 3.0),
         "Bogie wheelbase (m)",
         "Axle spacing within a bogie, 2l_h (twice the paper's half wheelbase 1.2 m), in "
-        "Train.axle_offsets and model.vehicle_track.assemble_vehicle. Bounds 1–5 m: real "
+        "Train.axle_offsets and model.track.assembly.assemble_vehicle. Bounds 1–5 m: real "
         "bogies have 1.6–3.5 m.",
     )
 
@@ -162,7 +162,7 @@ class Train(param.Parameterized):
         label="Single bogie only",
         doc="If true, simulate the paper's Fig. 1 model: half a car body on one bogie with two "
         "wheelsets, instead of the full train (Train.axle_offsets, "
-        "model.vehicle_track.assemble_vehicle).",
+        "model.track.assembly.assemble_vehicle).",
     )
 
     @classmethod
