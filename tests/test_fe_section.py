@@ -153,11 +153,15 @@ def test_very_strong_soil_leaves_no_residual():
 def test_residual_grows_with_the_load():
     """Default soil (c_u = 0.22 σ′_v0, K0 = 0.577, near failure): the permanent displacement at
     the invert after a passage is downward and larger for a twice larger pulse, and it grows
-    from the first passage to the second (an exact statement of the direction, no tolerance)."""
+    from the first passage to the second (an exact statement of the direction, no tolerance).
+
+    The pulses are 50 and 100 kN/m: 25 kN/m sits at the onset of yield, where whether any
+    element yields is decided by rounding (no element yielded on a machine with Debian 12's
+    OpenBLAS, while earlier runs saw a small residual); at 50 kN/m the residual is 0.05 mm."""
     scenario = Scenario.paper()
-    small = fe.run_fe(scenario, "mohr_coulomb", mesh=PLASTIC_MESH, load=(hann_pulse(25e3), DT_S))
+    small = fe.run_fe(scenario, "mohr_coulomb", mesh=PLASTIC_MESH, load=(hann_pulse(50e3), DT_S))
     large = fe.run_fe(
-        scenario, "mohr_coulomb", passages=2, mesh=PLASTIC_MESH, load=(hann_pulse(50e3), DT_S)
+        scenario, "mohr_coulomb", passages=2, mesh=PLASTIC_MESH, load=(hann_pulse(100e3), DT_S)
     )
     assert 0 < small.residual_disp_m[0] < large.residual_per_passage_m[0, 0]
     assert large.residual_per_passage_m[1, 0] > large.residual_per_passage_m[0, 0]
