@@ -29,8 +29,8 @@ sys.path.insert(0, str(ROOT))
 
 from model.longterm import section_transfer  # noqa: E402
 from model.params import Scenario, Soil, Tunnel  # noqa: E402
-from model.settlement import soil_response  # noqa: E402
-from model.tunnel_soil import invert_receptance  # noqa: E402
+from model.soil.response import soil_response  # noqa: E402
+from model.soil.section_2d import invert_receptance  # noqa: E402
 from tests.test_settlement import synthetic_train_load  # noqa: E402
 
 REPEATS = 7

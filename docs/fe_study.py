@@ -1,7 +1,7 @@
 """Mesh, time-step and boundary study of the FE section against the analytical 2D model.
 
 Prints the Markdown tables of docs/fe_section.md: elastic FE (model.fe_section.run_fe) and the
-analytical model (model.settlement through model.fe_section.analytical_profile) under the same
+analytical model (model.soil.response through model.fe_section.analytical_profile) under the same
 load, a Hann pulse at the invert (50 kN/m peak, 0.4 s long in a 1 s record: band 1–4 Hz,
 λ_min = c₂/4 Hz = 8.95 m),
 without and with the soil's hysteretic damping. Run: ``python docs/fe_study.py`` (~15 min).

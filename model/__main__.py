@@ -26,7 +26,7 @@ import numpy as np
 from model.params import Scenario
 from model.pipeline import STAGES, Results, SimulationError, run
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
-from model.settlement import COMPARISON_DEPTH_M
+from model.soil.response import COMPARISON_DEPTH_M
 
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 

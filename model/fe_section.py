@@ -58,7 +58,7 @@ Model (plane strain, 1 m thick slice, y up, origin on the tunnel axis):
 
 Displacements are reported downward positive, relative to the state before the first passage,
 on the nodes below the invert (depth = r − a, below the ring–soil interface as in
-``model.tunnel_soil.invert_receptance``).
+``model.soil.section_2d.invert_receptance``).
 """
 
 from __future__ import annotations
@@ -904,7 +904,7 @@ def _element_stress(ops, mesh: SectionMesh) -> np.ndarray:
 def analytical_profile(scenario: Scenario, line_load_N_per_m, dt_s: float, depth_m):
     """Peak downward displacement of the analytical 2D model (docs/model.md §7–8) at given depths.
 
-    ``model.settlement.soil_response`` on the same load history, its depth grid reaching the
+    ``model.soil.response.soil_response`` on the same load history, its depth grid reaching the
     deepest requested depth; interpolated (linearly) to ``depth_m``.
 
     Parameters
@@ -923,7 +923,7 @@ def analytical_profile(scenario: Scenario, line_load_N_per_m, dt_s: float, depth
     ndarray
         Peak downward displacement (m) at each depth.
     """
-    from model.settlement import soil_response
+    from model.soil.response import soil_response
 
     depth = np.asarray(depth_m, dtype=float)
     numerics = scenario.copy().numerics

@@ -5,8 +5,8 @@ The chain, per depth d below the ring–soil interface directly under the invert
 1. **Dynamic stresses.** The stress transfer functions of the tunnel–soil model (stress per unit
    downward line load at the invert, six components of :class:`StressField`) times the spectrum
    of the line load, transformed back to time on the soil stage's grid
-   (:func:`model.settlement.padded_record_grid`: same zero padding, band limit and output step),
-   the kernel sampled and interpolated alike (:func:`model.settlement.record_grid_transfer`).
+   (:func:`model.soil.response.padded_record_grid`: same zero padding, band limit and output step),
+   the kernel sampled and interpolated alike (:func:`model.soil.response.record_grid_transfer`).
    In 2D the axial stress is the plane-strain one, σ_xx = λ*(ε_rr + ε_θθ) =
    λ*/(2(λ* + μ*)) (σ_rr + σ_θθ), and σ_rx = σ_θx = 0.
 2. **Zero-frequency bin.** Unlike the 2D static displacement, the 2D static *stresses* are
@@ -14,7 +14,7 @@ The chain, per depth d below the ring–soil interface directly under the invert
    so σ(f) = σ(0) + O((ωr/c₂)² ln ω). The DC bin stands for the band [−Δf/2, Δf/2]; with
    σ(−f) = conj σ(f) its average is Re of the average over [0, Δf/2], which to that order is
    Re σ(Δf/(2e)), the same evaluation point as the displacement's DC bin
-   (:func:`model.settlement.dc_band_receptance`), so both stages follow one rule.
+   (:func:`model.soil.response.dc_band_receptance`), so both stages follow one rule.
 3. **Deviator.** q(t, d) = √(3 J₂) of the dynamic stress tensor, J₂ = ½ s:s with s its
    deviatoric part; in a triaxial state (σ₂ = σ₃) this is |σ₁ − σ₃|. q_d(d) = max over t.
 4. **Static state and strength.** Depth below ground z = H_t + a + d (H_t the axis depth, a the
@@ -45,15 +45,15 @@ import numpy as np
 import rainflow
 from scipy.integrate import cumulative_trapezoid
 
-from model.settlement import (
+from model.soil.moving_load_2p5d import StressField, invert_response_2p5d
+from model.soil.response import (
     SoilResponse,
     displacement_response,
     output_depths,
     padded_record_grid,
     record_grid_transfer,
 )
-from model.tunnel_soil import soil_field
-from model.tunnel_soil_3d import StressField, invert_response_2p5d
+from model.soil.section_2d import soil_field
 
 GRAVITY = 9.81  # m/s²
 WATER_DENSITY = 1000.0  # kg/m³
@@ -91,7 +91,7 @@ def stress_components(field) -> list[np.ndarray]:
 def plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics: int) -> StressField:
     """Stresses under the invert per unit downward line load, 2D plane-strain model.
 
-    σ_rr, σ_θθ, σ_rθ from :func:`model.tunnel_soil.soil_field` at θ = 0; the axial stress of
+    σ_rr, σ_θθ, σ_rθ from :func:`model.soil.section_2d.soil_field` at θ = 0; the axial stress of
     plane strain σ_xx = λ*/(2(λ* + μ*)) (σ_rr + σ_θθ); σ_rx = σ_θx = 0.
 
     Parameters
@@ -159,7 +159,7 @@ def stress_transfer(freq_hz, depth_m, scenario) -> StressField:
 def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField]:
     """Receptance and stresses under the invert per unit line load, one kernel evaluation.
 
-    The receptance is :func:`model.settlement.section_receptance`'s and the stresses
+    The receptance is :func:`model.soil.response.section_receptance`'s and the stresses
     :func:`stress_transfer`'s (the same numbers), from a single evaluation of the scenario's
     tunnel–soil kernel (2D, or 2.5D at ξ = ω/v, docs/model.md §9).
 
@@ -187,7 +187,7 @@ def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField
 
 def _grid_transfer(f_hz, depth, scenario) -> tuple[np.ndarray, StressField]:
     """:func:`invert_transfer` on a record grid, row 0 the DC band value (module docstring,
-    step 2), by :func:`model.settlement.record_grid_transfer` like the displacements."""
+    step 2), by :func:`model.soil.response.record_grid_transfer` like the displacements."""
 
     def evaluate(freq):
         receptance, stresses = invert_transfer(freq, depth, scenario)
@@ -317,8 +317,8 @@ def section_response(
 ) -> tuple[SoilResponse, StressResponse]:
     """Displacements and stresses under the invert for a line-load history, one kernel pass.
 
-    The same results as :func:`model.settlement.soil_response` and :func:`stress_response` at
-    the depths :func:`model.settlement.output_depths`, with the tunnel–soil kernel evaluated
+    The same results as :func:`model.soil.response.soil_response` and :func:`stress_response` at
+    the depths :func:`model.soil.response.output_depths`, with the tunnel–soil kernel evaluated
     once per frequency for both.
 
     Parameters

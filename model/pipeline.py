@@ -38,7 +38,7 @@ from model.longterm import (
 )
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
-from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail
+from model.soil.response import COMPARISON_DEPTH_M, SoilResponse, response_tail
 from model.spectra import one_sided_psd
 from model.track.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
@@ -51,7 +51,7 @@ INVARIANT_TOLERANCE = 1e-6
 # (checked by the tests), so that no setting is silently left out of a cache key.
 VEHICLE_TRACK_NUMERICS = ("dt", "n_rail_modes", "rail_end_margin", "approach_distance")
 LOAD_NUMERICS = ("psd_segment",)
-# Numerics of the 2.5D model's wavenumber integral (model.tunnel_soil_3d.point_load_response):
+# Numerics of the 2.5D model's wavenumber integral (model.soil.point_load.point_load_response):
 # in the soil key only when tunnel.model is "2.5d", so they never invalidate a 2D result.
 WAVENUMBER_NUMERICS = ("n_wavenumbers", "max_wavenumber", "wavenumber_tolerance")
 SOIL_NUMERICS = (
@@ -449,7 +449,7 @@ def check_record_padding(scenario: Scenario) -> None:
     """Refuse a padded record too short for the response at the deepest output depth.
 
     The soil stage's inverse FFT is periodic: a padded record shorter than the passage plus
-    the wave-travel tail to ``numerics.max_depth`` (``model.settlement.response_tail``) wraps
+    the wave-travel tail to ``numerics.max_depth`` (``model.soil.response.response_tail``) wraps
     the deep response onto itself, which lowers the deep peaks (e.g. by half at 35 m for a soft
     soil at 400 km/h) and can make them grow with depth.
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import scipy.fft
 
 from model.params import Scenario
-from model.settlement import decimation_factor, response_tail
+from model.soil.response import decimation_factor, response_tail
 
 SLOW_RUN_SECONDS = 30.0
 # Refuse a run whose arrays need more than this fraction of the memory available now.

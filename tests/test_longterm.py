@@ -33,8 +33,8 @@ from model.longterm import (
 )
 from model.params import DATA_DIR, LongTerm, Scenario, Soil, Tunnel
 from model.pipeline import STAGES, StageCache, run
-from model.settlement import kernel_sample_bins, soil_response
-from model.tunnel_soil import invert_receptance
+from model.soil.response import kernel_sample_bins, soil_response
+from model.soil.section_2d import invert_receptance
 
 SYNTHETIC_CSV = DATA_DIR / "triaxial_synthetic.csv"
 

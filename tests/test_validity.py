@@ -18,8 +18,8 @@ from model.__main__ import main
 from model.params import DATA_DIR, Scenario, ScenarioError
 from model.pipeline import StageCache, invariant_warnings, run, stage_keys
 from model.run_cost import SlowRunWarning, estimate_run
-from model.settlement import SoilResponse
-from model.tunnel_soil import invert_receptance
+from model.soil.response import SoilResponse
+from model.soil.section_2d import invert_receptance
 
 CHEAP_SET = [
     "--preset",

@@ -17,8 +17,8 @@ THIN_RING_MAX_RATIO = 0.2
 class Tunnel(param.Parameterized):
     """Concrete lining as a thin elastic ring in plane strain (paper Table 3, corrected).
 
-    Used by ``model.tunnel_soil`` (ring constants a, m, K, D of ``_ring_constants``). Besides the
-    bounds, ``Scenario.validate`` requires a thin ring, h/a ≤ ``THIN_RING_MAX_RATIO``.
+    Used by ``model.soil.inputs.ring_constants`` (a, m, K, D of the 2D ring and the 2.5D shell).
+    Besides the bounds, ``Scenario.validate`` requires a thin ring, h/a ≤ ``THIN_RING_MAX_RATIO``.
     """
 
     inner_radius = _q(
@@ -27,7 +27,7 @@ class Tunnel(param.Parameterized):
         (2.0, 4.0),
         "Lining inner radius (m)",
         "Inner radius of the lining (paper Table 3); a = inner radius + h/2 in "
-        "model.tunnel_soil._ring_constants. Bounds 1–10 m: a small service tunnel to a large "
+        "model.soil.inputs.ring_constants. Bounds 1–10 m: a small service tunnel to a large "
         "two-track tunnel.",
     )
     thickness = _q(
@@ -36,7 +36,7 @@ class Tunnel(param.Parameterized):
         (0.2, 0.6),
         "Lining thickness (m)",
         "Lining thickness h (the paper's '30 m' is a typo for 0.30 m, docs/model.md §7), in "
-        "model.tunnel_soil._ring_constants (m = ρh, K, D). Bounds 0.05–1.5 m; with "
+        "model.soil.inputs.ring_constants (m = ρh, K, D). Bounds 0.05–1.5 m; with "
         "Scenario.validate the thin-ring limit h/a ≤ 0.2.",
     )
     youngs_modulus = _q(
@@ -45,7 +45,7 @@ class Tunnel(param.Parameterized):
         (1e10, 5e10),
         "Lining Young's modulus (Pa)",
         "Young's modulus E_t of the lining (paper Table 3), in K = E_t h/(1 − ν_t²) and D of "
-        "model.tunnel_soil._ring_constants. Bounds 1–250 GPa: jointed masonry or cracked "
+        "model.soil.inputs.ring_constants. Bounds 1–250 GPa: jointed masonry or cracked "
         "concrete to a steel lining.",
     )
     poisson_ratio = _q(
@@ -54,7 +54,7 @@ class Tunnel(param.Parameterized):
         (0.1, 0.3),
         "Lining Poisson's ratio (-)",
         "Poisson's ratio ν_t of the lining (paper Table 3), in K and D of "
-        "model.tunnel_soil._ring_constants. Bounds 0–0.45: lining materials (concrete 0.15–0.2, "
+        "model.soil.inputs.ring_constants. Bounds 0–0.45: lining materials (concrete 0.15–0.2, "
         "steel 0.3).",
     )
     density = _q(
@@ -63,7 +63,7 @@ class Tunnel(param.Parameterized):
         (2000.0, 2800.0),
         "Lining density (kg/m³)",
         "Density ρ_t of the lining (paper Table 3), in the ring mass m = ρ_t h of "
-        "model.tunnel_soil._ring_constants. Bounds 1000–8000 kg/m³: lightweight concrete to "
+        "model.soil.inputs.ring_constants. Bounds 1000–8000 kg/m³: lightweight concrete to "
         "steel.",
     )
 
@@ -99,8 +99,8 @@ class Soil(param.Parameterized):
     Primary inputs are E, ν, ρ and the loss factors; wave speeds and Lamé constants are derived.
     The default E = 6 MPa, ν = 0.3 is the only reading of the self-inconsistent Table 4 that
     reproduces the paper's millimetre magnitudes (docs/model.md §7); the others are presets. Used by
-    ``model.tunnel_soil._soil_constants`` (μ*, λ*, ρ) and, for the record tail,
-    ``model.settlement.soil_response``.
+    ``model.soil.inputs.soil_constants`` (μ*, λ*, ρ) and, for the record tail,
+    ``model.soil.response.soil_response``.
     """
 
     youngs_modulus = _q(
@@ -109,7 +109,7 @@ class Soil(param.Parameterized):
         (1e6, 1e8),
         "Soil Young's modulus (Pa)",
         "Young's modulus E_s of the soil (paper Table 4), in μ, λ of "
-        "model.tunnel_soil._soil_constants. Bounds 1 MPa–100 GPa: a very soft clay to sound "
+        "model.soil.inputs.soil_constants. Bounds 1 MPa–100 GPa: a very soft clay to sound "
         "rock. Below ~1 MPa the small-strain elastic model is meaningless (a passing train "
         "would fail such ground) and its displacement profile stops decreasing with depth.",
     )
@@ -119,7 +119,7 @@ class Soil(param.Parameterized):
         (0.1, 0.49),
         "Soil Poisson's ratio (-)",
         "Poisson's ratio ν_s of the soil (paper Table 4), in λ = 2νμ/(1 − 2ν) of "
-        "model.tunnel_soil._soil_constants. Bounds 0–0.49: at 0.5 the P-wave speed is "
+        "model.soil.inputs.soil_constants. Bounds 0–0.49: at 0.5 the P-wave speed is "
         "infinite (incompressible soil).",
     )
     density = _q(
@@ -128,7 +128,7 @@ class Soil(param.Parameterized):
         (1400.0, 2200.0),
         "Soil density (kg/m³)",
         "Soil density ρ_s (assumed typical of Nanjing soft clay; not in Table 4), in "
-        "model.tunnel_soil._soil_constants and the wave speeds. Bounds 1000–3000 kg/m³: "
+        "model.soil.inputs.soil_constants and the wave speeds. Bounds 1000–3000 kg/m³: "
         "organic soils to dense rock.",
     )
     shear_loss_factor = _q(
@@ -137,7 +137,7 @@ class Soil(param.Parameterized):
         (0.0, 0.3),
         "Shear loss factor η_G (-)",
         "Hysteretic shear loss factor η_G: μ* = μ(1 + iη_G) in "
-        "model.tunnel_soil._soil_constants (paper Table 4). Bounds 0–0.4: a damping ratio "
+        "model.soil.inputs.soil_constants (paper Table 4). Bounds 0–0.4: a damping ratio "
         "η/2 up to 20 %; more is not small-strain behaviour, and the non-causal response of "
         "hysteretic damping grows with η.",
     )
@@ -147,7 +147,7 @@ class Soil(param.Parameterized):
         (0.0, 0.3),
         "Bulk loss factor η_K (-)",
         "Hysteretic bulk loss factor η_K: K* = K(1 + iη_K) in "
-        "model.tunnel_soil._soil_constants (paper Table 4). Bounds 0–0.4 as η_G.",
+        "model.soil.inputs.soil_constants (paper Table 4). Bounds 0–0.4 as η_G.",
     )
 
     @classmethod

@@ -56,9 +56,10 @@ class Numerics(param.Parameterized):
         bounds=(1, 1024),
         softbounds=(4, 128),
         label="Ring harmonics",
-        doc="Circumferential harmonics n = 0..N_n summed in model.tunnel_soil.invert_receptance "
-        "(called from model.settlement.soil_response). Bounds 1–1024: the ring's bending makes "
-        "the terms fall as n⁻⁴ (32 converge to 1e-3, tests); more only cost time.",
+        doc="Circumferential harmonics n = 0..N_n summed in "
+        "model.soil.section_2d.invert_receptance (called from model.soil.response.soil_response). "
+        "Bounds 1–1024: the ring's bending makes the terms fall as n⁻⁴ (32 converge to 1e-3, "
+        "tests); more only cost time.",
     )
     soil_max_frequency = _q(
         100.0,
@@ -66,7 +67,7 @@ class Numerics(param.Parameterized):
         (30.0, 300.0),
         "Soil model frequency limit (Hz)",
         "Highest frequency f_max passed to the tunnel–soil model in "
-        "model.settlement.soil_response; the load has negligible content above (paper Fig. 7: "
+        "model.soil.response.soil_response; the load has negligible content above (paper Fig. 7: "
         "0–30 Hz). Bounds 5–1000 Hz: below 5 Hz the wheel-passage pulses are cut, above "
         "1 kHz the 2D section model has no meaning.",
     )
@@ -76,7 +77,7 @@ class Numerics(param.Parameterized):
         softbounds=(1, 32),
         label="Zero-padding factor",
         doc="Record length used for the soil FFT, as a multiple of the passage duration, in "
-        "model.settlement.soil_response (convergence of the peak is shown in tests). Bounds "
+        "model.soil.response.soil_response (convergence of the peak is shown in tests). Bounds "
         "1–256; a run also refuses a padded record shorter than the passage plus the wave tail "
         "to max_depth (model.pipeline.check_record_padding), which would wrap the deep response.",
     )
@@ -94,7 +95,7 @@ class Numerics(param.Parameterized):
         (11.0, 200.0),
         (11.0, 60.0),
         "Deepest output depth (m)",
-        "Depth below the invert down to which model.settlement.soil_response reports the "
+        "Depth below the invert down to which model.soil.response.soil_response reports the "
         "displacement (paper Fig. 11 and conclusions: 35 m). Bounds 11–200 m: 11 m is the "
         "paper's comparison depth, which the summary always reports; a full-space model of the "
         "ground says nothing deeper than 200 m.",
@@ -105,8 +106,8 @@ class Numerics(param.Parameterized):
         softbounds=(11, 201),
         label="Output depths",
         doc="Number of equally spaced depths from the invert to the deepest one, in "
-        "model.settlement.soil_response. Bounds 2–2000: a profile needs two points; memory grows "
-        "as depths × padded samples (run-cost guard).",
+        "model.soil.response.soil_response. Bounds 2–2000: a profile needs two points; memory "
+        "grows as depths × padded samples (run-cost guard).",
     )
     n_wavenumbers = Count(
         384,
@@ -114,7 +115,7 @@ class Numerics(param.Parameterized):
         softbounds=(128, 4096),
         label="Wavenumber points",
         doc="Points of the base grid of the wavenumber integral of the 2.5D point-load response "
-        "(model.tunnel_soil_3d.point_load_response): uniform in asinh(ξ/ξ_c) on [0, max "
+        "(model.soil.point_load.point_load_response): uniform in asinh(ξ/ξ_c) on [0, max "
         "wavenumber], plus refinements at the P and S wavenumbers ω/c.",
     )
     max_wavenumber = _q(
@@ -123,7 +124,7 @@ class Numerics(param.Parameterized):
         (5.0, 100.0),
         "Largest wavenumber (rad/m)",
         "Upper limit ξ_max of the wavenumber integral of the 2.5D point-load response "
-        "(model.tunnel_soil_3d.point_load_response); the tail beyond is estimated and must be "
+        "(model.soil.point_load.point_load_response); the tail beyond is estimated and must be "
         "below the wavenumber tolerance. Bounds up to 1000 rad/m: wavelengths down to 6 mm, "
         "far below the lining thickness where the thin-shell model ends.",
         (False, True),
@@ -134,7 +135,7 @@ class Numerics(param.Parameterized):
         (1e-5, 1e-2),
         "Wavenumber integral tolerance (-)",
         "Largest estimated error of the 2.5D wavenumber integral "
-        "(model.tunnel_soil_3d.point_load_response), relative to the largest response at the "
+        "(model.soil.point_load.point_load_response), relative to the largest response at the "
         "same frequency and depth; a larger estimate raises an error naming the numerics "
         "parameter to raise.",
         (False, True),
@@ -145,7 +146,7 @@ class Numerics(param.Parameterized):
         softbounds=(6, 32),
         label="Kernel samples per cycle",
         doc="Frequency sampling of the tunnel–soil kernel on the soil stage's record grid, in "
-        "model.settlement.record_grid_transfer: the kernel is evaluated at frequencies at most "
+        "model.soil.response.record_grid_transfer: the kernel is evaluated at frequencies at most "
         "c_s/(N r) apart, N this count, r = a + max_depth the distance from the tunnel axis to "
         "the deepest output point (the outgoing S wave there turns through one cycle every "
         "c_s/r Hz), and interpolated in between (6-point Lagrange); below N such steps (near "
