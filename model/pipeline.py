@@ -28,17 +28,12 @@ from typing import Any
 
 import numpy as np
 
-from model.longterm import (
-    LongTermResult,
-    StressResponse,
-    check_longterm_inputs,
-    long_term_settlement,
-    section_response,
-    section_transfer,
-)
+from model.longterm.geostatic import check_longterm_inputs
+from model.longterm.settlement import LongTermResult, long_term_settlement
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.soil.response import COMPARISON_DEPTH_M, SoilResponse, response_tail
+from model.soil.stresses import StressResponse, section_response, section_transfer
 from model.spectra import one_sided_psd
 from model.track.vehicle_track import VehicleTrackResult, check_inputs, simulate
 

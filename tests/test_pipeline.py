@@ -125,7 +125,7 @@ def test_a_new_load_on_the_same_record_grid_reuses_the_soil_transfer_bit_for_bit
 
 
 def test_a_transfer_from_another_grid_is_refused(cheap_scenario):
-    from model.longterm import section_response, section_transfer
+    from model.soil.stresses import section_response, section_transfer
 
     results = run(cheap_scenario(), cache=None)
     q, dt = results.load.line_load_N_per_m, float(results.load.t_s[1])

@@ -13,5 +13,7 @@ docs/tunnel_soil_3d.md (2.5D).
   exp(i(ωt − ξx)): :func:`receptance_2p5d` and the stresses under the invert (§9);
 - ``point_load``: the point-force response of the 2.5D model, the wavenumber integral of H;
 - ``response``: the line-load history through the chosen kernel to displacement histories at
-  depth, their peaks and spectra (§8) — the *transient* response, not the permanent settlement.
+  depth, their peaks and spectra (§8) — the *transient* response, not the permanent settlement;
+- ``stresses``: the dynamic stresses and deviator under the invert per passage, from the same
+  kernel evaluation, which drive the long-term stage (§10).
 """
