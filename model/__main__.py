@@ -190,7 +190,7 @@ def write_results(results: Results, out: Path) -> list[Path]:
     return [*written, scenario_path, summary_path]
 
 
-SUBCOMMANDS = {"study": "model.study", "fe": "model.fe_section"}
+SUBCOMMANDS = {"study": "model.study.cli", "fe": "model.fe.cli"}
 """Subcommand → module whose ``main(argv)`` handles it."""
 
 
