@@ -33,7 +33,7 @@ from dashboard import plots
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
 from dashboard.study_view import RESULTS, display_values, study_plots
 from dashboard.whatif import CURRENT_LABEL, WhatIfSession, load_session
-from model.__main__ import add_scenario_arguments, load_scenario
+from model.cli import add_scenario_arguments, load_scenario
 from model.params import display_label
 from model.pipeline import Results, SimulationError, StageCache, run
 from model.scenarios import CUSTOM, matching_preset

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from model.__main__ import main
+from model.cli import main
 from model.longterm.calibration import fit_strain_law, load_triaxial_csv
 from model.longterm.cycles import range_weighted_cycles
 from model.longterm.geostatic import check_longterm_inputs, static_state

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from model import pipeline
-from model.__main__ import main
+from model.cli import main
 from model.params import Numerics, Scenario, ScenarioError
 from model.pipeline import StageCache, run
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from model import pipeline, run_cost
-from model.__main__ import main
+from model.cli import main
 from model.params import DATA_DIR, Scenario, ScenarioError
 from model.pipeline import StageCache, invariant_warnings, run, stage_keys
 from model.run_cost import SlowRunWarning, estimate_run
@@ -238,7 +238,7 @@ def test_6_an_unwritable_output_is_refused_before_computing(tmp_path, capsys, mo
     def must_not_run(*args, **kwargs):
         raise AssertionError("the run started before the output path was checked")
 
-    monkeypatch.setattr("model.__main__.run", must_not_run)
+    monkeypatch.setattr("model.cli.run", must_not_run)
     with pytest.raises(SystemExit) as info:
         main([*CHEAP_SET, "--out", str(out)])
     assert info.value.code == 2

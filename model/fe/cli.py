@@ -19,7 +19,7 @@ FE_STAGES = ("load", "gravity", "dynamic")
 
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``python -m model fe``."""
-    from model.__main__ import add_scenario_arguments
+    from model.cli import add_scenario_arguments
 
     parser = argparse.ArgumentParser(
         prog="python -m model fe",
@@ -71,7 +71,7 @@ def write_fe_outputs(result: FEResult, out: Path) -> list[Path]:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m model fe``: returns the exit code (2 for bad input or an unavailable FE)."""
-    from model.__main__ import TerminalProgress, load_scenario
+    from model.cli import TerminalProgress, load_scenario
     from model.pipeline import SimulationError
 
     parser = build_parser()

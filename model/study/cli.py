@@ -42,7 +42,7 @@ def parse_values(spec: str) -> list[str] | tuple[str, str] | None:
 
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``python -m model study``."""
-    from model.__main__ import add_scenario_arguments
+    from model.cli import add_scenario_arguments
 
     parser = argparse.ArgumentParser(
         prog="python -m model study",
@@ -96,7 +96,7 @@ def _parse_seeds(text: str, base_seed: int) -> list[int]:
 
 def study_from_args(args: argparse.Namespace) -> Study:
     """The :class:`Study` described by the command line."""
-    from model.__main__ import load_scenario
+    from model.cli import load_scenario
 
     if args.study:
         return load_study(args.study)
@@ -129,7 +129,7 @@ def study_from_args(args: argparse.Namespace) -> Study:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m model study``: returns the exit code (2 bad input, 130 cancelled)."""
-    from model.__main__ import TerminalProgress
+    from model.cli import TerminalProgress
 
     class StudyProgress(TerminalProgress):
         """Runs done out of all, on the command line's progress bar."""
