@@ -60,6 +60,11 @@ SOIL_NUMERICS = (
     *WAVENUMBER_NUMERICS,
 )
 
+# Tunnel parameters read by the long-term stage only (the static stress state; the full-space
+# soil models have no ground surface): in the long-term key, not the soil key, so that changing
+# them re-runs the long-term stage alone. A soil model that reads one must take it off this list.
+LONGTERM_TUNNEL = ("axis_depth",)
+
 # The soil stage also yields the stresses under the invert (Results.stress): both come from
 # one evaluation of the tunnel–soil kernel, so they share a stage and its cache key.
 STAGES = ("vehicle_track", "load", "soil", "longterm")
@@ -260,7 +265,9 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     moving_load = scenario.tunnel.model == "2.5d"
     soil = {
         "upstream": load,
-        "tunnel": data["tunnel"],  # includes tunnel.model
+        "tunnel": {  # includes tunnel.model
+            name: value for name, value in data["tunnel"].items() if name not in LONGTERM_TUNNEL
+        },
         "soil": data["soil"],
         "numerics": pick(
             name for name in SOIL_NUMERICS if moving_load or name not in WAVENUMBER_NUMERICS
@@ -268,7 +275,11 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     }
     if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v
         soil["speed_kmh"] = data["train"]["speed_kmh"]
-    longterm = {"upstream": soil, "longterm": data["longterm"]}
+    longterm = {
+        "upstream": soil,
+        "longterm": data["longterm"],
+        "tunnel": {name: data["tunnel"][name] for name in LONGTERM_TUNNEL},
+    }
     # the transfer functions: the soil stage's inputs but the load, whose record's length and
     # step (which set the frequency grid) run() appends
     transfer = {name: value for name, value in soil.items() if name != "upstream"}

@@ -535,8 +535,8 @@ def test_summary_and_result_fields(results):
 
 def test_impossible_static_states_are_refused_before_computing():
     scenario = Scenario.paper()
-    scenario.longterm.axis_depth = 2.0
-    with pytest.raises(ValueError, match=r"longterm.axis_depth = 2 m .* outer radius 3 m"):
+    scenario.tunnel.axis_depth = 2.0
+    with pytest.raises(ValueError, match=r"tunnel.axis_depth = 2 m .* outer radius 3 m"):
         check_longterm_inputs(scenario)
     scenario = Scenario.paper()
     scenario.soil.density = 1000.0  # the lower bound: no effective stress

@@ -204,6 +204,26 @@ def test_every_numerics_parameter_is_in_some_stage_key():
 
 
 @pytest.mark.parametrize("model", ["2d", "2.5d"])
+def test_the_axis_depth_re_runs_the_long_term_stage_only(cheap_scenario, model):
+    """tunnel.axis_depth is read by the static stress state alone (pipeline.LONGTERM_TUNNEL): a
+    change leaves the soil key and the transfer functions' key as they were, and a cached run
+    serves every stage but the long-term one, whose static strength changes with the depth."""
+    scenario = cheap_scenario()
+    scenario.tunnel.model = model
+    before = pipeline.stage_keys(scenario)
+    scenario.tunnel.axis_depth = 25.0
+    after = pipeline.stage_keys(scenario)
+    assert {stage for stage in before if before[stage] != after[stage]} == {"longterm"}
+    if model == "2.5d":
+        return  # the keys are the point; one run of the cheap 2D case checks the cache
+    cache = StageCache()
+    shallow = run(cheap_scenario(), cache=cache)
+    deep = run(scenario, cache=cache)
+    assert deep.cached_stages == ("vehicle_track", "load", "soil")
+    assert np.all(deep.longterm.strength_Pa > shallow.longterm.strength_Pa)
+
+
+@pytest.mark.parametrize("model", ["2d", "2.5d"])
 def test_kernel_sampling_changes_the_soil_keys_only(model):
     """The kernel sampling changes the transfer functions (tests/test_longterm.py): a cached
     soil stage or transfer made with another sampling must not be served."""

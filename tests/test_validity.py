@@ -114,8 +114,8 @@ def test_2_a_thick_lining_breaks_the_thin_ring_model():
 
 def test_2_a_tunnel_above_the_ground_surface_is_refused():
     scenario = Scenario.paper()
-    scenario.longterm.axis_depth = 2.0
-    with pytest.raises(ScenarioError, match=r"longterm\.axis_depth = 2 m .*above the ground"):
+    scenario.tunnel.axis_depth = 2.0
+    with pytest.raises(ScenarioError, match=r"tunnel\.axis_depth = 2 m .*above the ground"):
         scenario.validate()
 
 

@@ -14,7 +14,7 @@
   their tributary arc length.
 - **Gravity with K0 first.** The geostatic stress of the level ground above, extended linearly
   over the whole (full-space) mesh: total vertical stress σ_v = ρ g z at depth z = H_t − y
-  below the surface (H_t = ``longterm.axis_depth``), pore pressure u = γ_w (z − z_w), effective
+  below the surface (H_t = ``tunnel.axis_depth``), pore pressure u = γ_w (z − z_w), effective
   σ′_v = σ_v − u, horizontal σ_h = K0 σ′_v + u with K0 = 1 − sin φ′ (``longterm``). It is set up
   by the body force ρ g and the tractions of that field on the outer boundary (a linear stress
   field is compatible, so the elastic solution reproduces it exactly away from the tunnel),
@@ -130,7 +130,7 @@ def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, pla
     ele_x, ele_y = mesh.centroids()
     ops.nDMaterial("ElasticIsotropic", 1, soil.youngs_modulus, soil.poisson_ratio, rho)
     plastic = (soil_law == "mohr_coulomb") & (np.hypot(ele_x, ele_y) <= plastic_radius)
-    plastic &= ele_y < scenario.longterm.axis_depth
+    plastic &= ele_y < scenario.tunnel.axis_depth
     strength = undrained_strength(scenario, ele_y)
     for i in range(nr):
         for j in range(nt):

@@ -147,10 +147,10 @@ class Geostatic:
 
 
 def geostatic(scenario: Scenario) -> Geostatic:
-    """The geostatic field of the scenario's long-term ground parameters (docs/model.md §10)."""
+    """The geostatic field of the tunnel's axis depth and the long-term ground parameters (§10)."""
     lt = scenario.longterm
     return Geostatic(
-        axis_depth=lt.axis_depth,
+        axis_depth=scenario.tunnel.axis_depth,
         unit_weight=scenario.soil.density * GRAVITY,
         water_table_depth=lt.water_table_depth,
         k0=lt.earth_pressure_coefficient,

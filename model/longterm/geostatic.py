@@ -43,9 +43,9 @@ def static_state(depth_m, longterm, tunnel, soil) -> StaticState:
     depth_m : array_like
         Depths d ≥ 0 below the ring–soil interface (m).
     longterm : model.params.LongTerm
-        Uses axis_depth, water_table_depth, friction_angle (K0), cu_ratio, undrained_strength.
+        Uses water_table_depth, friction_angle (K0), cu_ratio, undrained_strength.
     tunnel : model.params.Tunnel
-        Uses ring_radius.
+        Uses axis_depth and ring_radius.
     soil : model.params.Soil
         Uses density (kg/m³), taken as the saturated density.
 
@@ -59,7 +59,7 @@ def static_state(depth_m, longterm, tunnel, soil) -> StaticState:
         If σ′_v0 is not positive somewhere (a soil lighter than water below the water table).
     """
     depth = np.atleast_1d(np.asarray(depth_m, dtype=float))
-    below_ground = longterm.axis_depth + tunnel.ring_radius + depth
+    below_ground = tunnel.axis_depth + tunnel.ring_radius + depth
     total = soil.density * GRAVITY * below_ground
     pore = WATER_DENSITY * GRAVITY * np.maximum(0.0, below_ground - longterm.water_table_depth)
     effective = total - pore
@@ -91,9 +91,9 @@ def check_longterm_inputs(scenario) -> None:
     """
     tunnel, longterm = scenario.tunnel, scenario.longterm
     outer_radius = tunnel.inner_radius + tunnel.thickness
-    if longterm.axis_depth < outer_radius:
+    if tunnel.axis_depth < outer_radius:
         raise ValueError(
-            f"longterm.axis_depth = {longterm.axis_depth:g} m is less than the lining's outer "
+            f"tunnel.axis_depth = {tunnel.axis_depth:g} m is less than the lining's outer "
             f"radius {outer_radius:g} m: the tunnel would stand out of the ground; allowed "
             f"range [{outer_radius:g}, 200] m"
         )

@@ -17,7 +17,9 @@ THIN_RING_MAX_RATIO = 0.2
 class Tunnel(param.Parameterized):
     """Concrete lining as a thin elastic ring in plane strain (paper Table 3, corrected).
 
-    Used by ``model.soil.inputs.ring_constants`` (a, m, K, D of the 2D ring and the 2.5D shell).
+    Used by ``model.soil.inputs.ring_constants`` (a, m, K, D of the 2D ring and the 2.5D shell);
+    the axis depth only by the static stress state of the long-term stage (the full-space soil
+    models have no ground surface).
     Besides the bounds, ``Scenario.validate`` requires a thin ring, h/a ≤ ``THIN_RING_MAX_RATIO``.
     """
 
@@ -65,6 +67,17 @@ class Tunnel(param.Parameterized):
         "Density ρ_t of the lining (paper Table 3), in the ring mass m = ρ_t h of "
         "model.soil.inputs.ring_constants. Bounds 1000–8000 kg/m³: lightweight concrete to "
         "steel.",
+    )
+    axis_depth = _q(
+        15.0,
+        (0, 200),
+        (8.0, 40.0),
+        "Tunnel axis depth (m)",
+        "Depth of the tunnel axis below the ground surface, H_t, for the static stress state in "
+        "model.longterm.geostatic (and the FE gravity stage, model.fe.inputs.geostatic); the "
+        "paper gives none, 15 m is assumed. Bounds (0, 200] m; Scenario.validate requires the "
+        "lining below the ground surface.",
+        (False, True),
     )
 
     model = param.Selector(

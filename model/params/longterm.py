@@ -106,16 +106,6 @@ class LongTerm(param.Parameterized):
         doc="Load cycles per passage in model.longterm: one per bogie, or counted on the deviator "
         "history by rainflow (ASTM E1049), full cycles weighted by their range.",
     )
-    axis_depth = _q(
-        15.0,
-        (0, 200),
-        (8.0, 40.0),
-        "Tunnel axis depth (m)",
-        "Depth of the tunnel axis below the ground surface, H_t, for the static stress state in "
-        "model.longterm; the paper gives none, 15 m is assumed. Bounds (0, 200] m; "
-        "Scenario.validate requires the lining below the ground surface.",
-        (False, True),
-    )
     water_table_depth = _q(
         0.0,
         (0, 200),

@@ -30,6 +30,11 @@ SECTIONS = (
     "longterm",
 )
 
+MOVED_PARAMETERS = {"longterm.axis_depth": "tunnel.axis_depth"}
+"""Former dotted path → current one, so that scenario files written before a parameter moved to
+another section still load (the axis depth moved to the tunnel, where later models of the ground
+need it)."""
+
 
 class Scenario(param.Parameterized):
     """One complete set of inputs: vehicle, train, track, irregularity, tunnel, soil, numerics,
@@ -106,9 +111,12 @@ class Scenario(param.Parameterized):
 
     @classmethod
     def from_dict(cls, data: dict[str, dict[str, Any]]) -> Scenario:
-        """Scenario from :meth:`to_dict` output (missing values take their defaults)."""
+        """Scenario from :meth:`to_dict` output (missing values take their defaults).
+
+        A parameter under its former path (``MOVED_PARAMETERS``) is read at its current one.
+        """
         scenario = cls()
-        scenario.update(data)
+        scenario.update(_with_moved_parameters(data))
         return scenario
 
     @classmethod
@@ -292,10 +300,10 @@ class Scenario(param.Parameterized):
                 f"{tunnel.thickness / tunnel.ring_radius:.3g}): the thin-ring lining model does "
                 f"not hold; allowed h ≤ {THIN_RING_MAX_RATIO:g} a"
             )
-        cover = self.longterm.axis_depth - tunnel.inner_radius - tunnel.thickness
+        cover = tunnel.axis_depth - tunnel.inner_radius - tunnel.thickness
         if cover <= 0.0:
             problems.append(
-                f"longterm.axis_depth = {self.longterm.axis_depth:g} m puts the lining (outer "
+                f"tunnel.axis_depth = {tunnel.axis_depth:g} m puts the lining (outer "
                 f"radius {tunnel.inner_radius + tunnel.thickness:g} m) above the ground surface; "
                 "allowed: axis depth > tunnel.inner_radius + tunnel.thickness"
             )
@@ -307,6 +315,34 @@ class Scenario(param.Parameterized):
             )
         if problems:
             raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
+
+
+def _with_moved_parameters(data):
+    """``data`` with every parameter of ``MOVED_PARAMETERS`` under its current section.
+
+    Raises
+    ------
+    ValueError
+        The former and the current path are both given, with different values.
+    """
+    if not isinstance(data, dict):
+        return data  # refused, with its message, by Scenario.update
+    data = {section: dict(v) if isinstance(v, dict) else v for section, v in data.items()}
+    for old, new in MOVED_PARAMETERS.items():
+        (old_section, old_name), (new_section, new_name) = old.split("."), new.split(".")
+        values = data.get(old_section)
+        if not isinstance(values, dict) or old_name not in values:
+            continue
+        value = values.pop(old_name)
+        target = data.setdefault(new_section, {})
+        if not isinstance(target, dict):
+            continue  # refused by Scenario.update
+        if target.setdefault(new_name, value) != value:
+            raise ValueError(
+                f"{old} = {value!r} and {new} = {target[new_name]!r} disagree: {old} is the "
+                f"former path of {new}; give only {new}"
+            )
+    return data
 
 
 def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
