@@ -233,7 +233,7 @@ def test_deviator_peak_converges_as_the_record_is_padded(cheap_scenario):
 
     The peak invert deviator with padding 8 and 16 agree to 0.5 % (the padding error of the
     displacement, which has the harder ln ω DC term, is shown below 1 % at 8 in
-    test_settlement).
+    test_soil_response).
     """
     scenario = cheap_scenario()
     vt_results = run(scenario, cache=None)
