@@ -91,7 +91,7 @@ def run_fe(
         Tunnel, soil (E, ν, ρ, η_G) and the long-term ground parameters (axis depth, water
         table, φ′ for K0, c_u); the load comes from ``model.pipeline.run(scenario)``.
     soil_law : {"elastic", "mohr_coulomb"}
-        Soil model (module docstring).
+        Soil model (the soil laws of ``model.fe.build``).
     passages : int
         Passages in a row, ≥ 1.
     mesh : FEMesh, optional

@@ -106,8 +106,8 @@ class Track(param.Parameterized):
         (0.25, 0.6),
         (0.35, 0.5),
         "Wheel radius (m)",
-        "Rolling radius of the wheel, R (assumed), in Track.hertz_constant (used by the "
-        "model.track.vehicle_track kernel). Bounds 0.25–0.6 m: where Zhai's Hertz fits G(R) were "
+        "Rolling radius of the wheel, R (assumed), in Track.hertz_constant (used by "
+        "model.track.kernels.hertz_force). Bounds 0.25–0.6 m: where Zhai's Hertz fits G(R) were "
         "made (wheel diameters 0.5–1.2 m).",
     )
 
@@ -116,7 +116,7 @@ class Track(param.Parameterized):
         objects=list(HERTZ_FITS),
         label="Wheel tread",
         doc="Tread profile for the Hertz constant G of Track.hertz_constant (the contact law of "
-        "the model.track.vehicle_track kernel): conical G = 4.57 R^-0.149e-8, worn "
+        "model.track.kernels.hertz_force): conical G = 4.57 R^-0.149e-8, worn "
         "G = 3.86 R^-0.115e-8 (paper §2.3, docs/model.md §3).",
     )
 
@@ -158,7 +158,7 @@ class Track(param.Parameterized):
 class Irregularity(param.Parameterized):
     """Vertical rail-profile irregularity: US FRA PSD, trigonometric-series synthesis (§2.4).
 
-    Used by ``model.track.irregularity.profile_for`` (called from ``model.track.vehicle_track``).
+    Used by ``model.track.irregularity.profile_for`` (called from ``model.track.assembly``).
     """
 
     enabled = param.Boolean(
@@ -189,8 +189,8 @@ class Irregularity(param.Parameterized):
         "Shortest wavelength (m)",
         "Lower end λ_min of the synthesised band (docs/model.md §4: 1 m), in "
         "model.track.irregularity.series_wavenumbers; sets the profile grid step λ_min/100 in "
-        "model.track.vehicle_track. Bounds 0.1–100 m: shorter waves are corrugation, outside the "
-        "FRA fit; must be below wavelength_max (Scenario.validate).",
+        "model.track.assembly.assemble_wheels. Bounds 0.1–100 m: shorter waves are "
+        "corrugation, outside the FRA fit; must be below wavelength_max (Scenario.validate).",
     )
     wavelength_max = _q(
         50.0,

@@ -108,7 +108,7 @@ class Vehicle(param.Parameterized):
 class Train(param.Parameterized):
     """Train geometry and speed. Defaults: Nanjing Lines 1–2 six-car Type A (docs/model.md §1).
 
-    Used by ``Train.axle_offsets`` (wheel positions in model.track.vehicle_track) and
+    Used by ``Train.axle_offsets`` (wheel positions in model.track.assembly) and
     ``Scenario.passage_duration``.
     """
 
@@ -125,7 +125,7 @@ class Train(param.Parameterized):
         (1.0, 400.0),
         (20.0, 160.0),
         "Speed (km/h)",
-        "Train speed v (paper §4.1: 80 km/h), in model.track.vehicle_track (wheel positions) and "
+        "Train speed v (paper §4.1: 80 km/h), in model.track.assembly (wheel positions) and "
         "Scenario.passage_duration. Bounds 1–400 km/h: the record lasts ∝ 1/v (a crawl would "
         "need millions of steps) and 400 km/h is the fastest rail service.",
     )
