@@ -88,8 +88,8 @@ def run_fe(
     Parameters
     ----------
     scenario : Scenario
-        Tunnel, soil (E, ν, ρ, η_G) and the long-term ground parameters (axis depth, water
-        table, φ′ for K0, c_u); the load comes from ``model.pipeline.run(scenario)``.
+        Tunnel (with its axis depth), soil (E, ν, ρ, η_G) and the long-term ground parameters
+        (water table, φ′ for K0, c_u); the load comes from ``model.pipeline.run(scenario)``.
     soil_law : {"elastic", "mohr_coulomb"}
         Soil model (the soil laws of ``model.fe.build``).
     passages : int
