@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from model.fe_section import run_fe  # noqa: E402
+from model.fe.analysis import run_fe  # noqa: E402
 from model.params import Scenario  # noqa: E402
 from model.pipeline import run  # noqa: E402
 

@@ -15,7 +15,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from model.irregularity import synthesize_profile  # noqa: E402
+from model.track.irregularity import synthesize_profile  # noqa: E402
 
 GRID_LENGTH_M = 316.0
 GRID_STEP_M = 0.005

@@ -15,10 +15,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from model.longterm import long_term_settlement, section_response  # noqa: E402
+from model.longterm.settlement import long_term_settlement  # noqa: E402
 from model.params import Scenario  # noqa: E402
 from model.pipeline import STAGES, StageCache, run  # noqa: E402
-from model.settlement import soil_response  # noqa: E402
+from model.soil.response import soil_response  # noqa: E402
+from model.soil.stresses import section_response  # noqa: E402
 
 REPEATS = 5
 

@@ -6,9 +6,9 @@ loading it from the cache) and the best of N warm calls:
 - ``invert_receptance`` for 64 harmonics × 4096 frequencies (0.024–100 Hz) × 50 depths
   (0–35 m); target ≤ 1 s;
 - the whole soil stage ``soil_response`` for the paper preset: a 6.66 s line load at 1e-4 s
-  (the synthetic six-car train of tests/test_settlement.py), default numerics (32 harmonics,
+  (the synthetic six-car train of tests/test_soil_response.py), default numerics (32 harmonics,
   100 Hz, padding 8, 71 depths); target ≤ 1 s.
-- the tunnel–soil transfer functions of the soil stage (``model.longterm.section_transfer``,
+- the tunnel–soil transfer functions of the soil stage (``model.soil.stresses.section_transfer``,
   receptance and stresses) on that load's record grid, 2D and 2.5D, with the kernel evaluated at
   every frequency (``kernel_samples_per_cycle = 0``) and sampled at the default.
 
@@ -27,11 +27,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from model.longterm import section_transfer  # noqa: E402
 from model.params import Scenario, Soil, Tunnel  # noqa: E402
-from model.settlement import soil_response  # noqa: E402
-from model.tunnel_soil import invert_receptance  # noqa: E402
-from tests.test_settlement import synthetic_train_load  # noqa: E402
+from model.soil.response import soil_response  # noqa: E402
+from model.soil.section_2d import invert_receptance  # noqa: E402
+from model.soil.stresses import section_transfer  # noqa: E402
+from tests.test_soil_response import synthetic_train_load  # noqa: E402
 
 REPEATS = 7
 

@@ -27,8 +27,8 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.bench_soil import best_of  # noqa: E402
 from model.params import Scenario  # noqa: E402
 from model.pipeline import run  # noqa: E402
-from model.settlement import soil_response  # noqa: E402
-from model.tunnel_soil_3d import point_load_response  # noqa: E402
+from model.soil.point_load import point_load_response  # noqa: E402
+from model.soil.response import soil_response  # noqa: E402
 
 REPEATS = 3
 

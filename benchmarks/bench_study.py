@@ -6,9 +6,11 @@ Run: ``python benchmarks/bench_study.py [--runs 20] [--workers 2]``. The paper c
 - serial: ``run(scenario, cache=StageCache())`` for each seed in this process (warm Numba
   caches; the stage cache lets the runs share the tunnel–soil transfer functions, as each study
   worker's process does, so that the ratio measures the parallelism, not the cache);
-- study, warm cluster: :func:`model.study.execute_study` on a LocalCluster whose workers have
-  already loaded the compiled kernels (an existing cluster, the usual case for big studies);
-- study, cold: :func:`model.study.run_study` with ``scheduler=None``, cluster start included;
+- study, warm cluster: :func:`model.study.execution.execute_study` on a LocalCluster whose
+  workers have already loaded the compiled kernels (an existing cluster, the usual case for big
+  studies);
+- study, cold: :func:`model.study.execution.run_study` with ``scheduler=None``, cluster start
+  included;
 - per-task overhead: the round trip of a task that does nothing, submitted and collected the
   way a study does, and the scenario-JSON parsing a study task adds to a run.
 
@@ -31,7 +33,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from model.params import Scenario  # noqa: E402
 from model.pipeline import StageCache, run  # noqa: E402
-from model.study import define_study, execute_study, run_study, study_client  # noqa: E402
+from model.study.definition import define_study  # noqa: E402
+from model.study.execution import execute_study, run_study, study_client  # noqa: E402
 
 N_NOOP = 200
 

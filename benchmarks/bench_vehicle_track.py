@@ -1,4 +1,4 @@
-"""Time the vehicle–track simulation (model/vehicle_track.py) and print the figures.
+"""Time the vehicle–track simulation (model/track/vehicle_track.py) and print the figures.
 
 Run: ``python benchmarks/bench_vehicle_track.py [--quick]``. Prints
 
@@ -37,14 +37,15 @@ except ImportError:
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from model import vehicle_track as vt  # noqa: E402
 from model.params import Scenario  # noqa: E402
+from model.track import assembly  # noqa: E402
+from model.track import vehicle_track as vt  # noqa: E402
 
 COLD_SCRIPT = """
 import time
 t0 = time.perf_counter()
 from model.params import Scenario
-from model.vehicle_track import simulate
+from model.track.vehicle_track import simulate
 s = Scenario.preset("single_bogie")
 t1 = time.perf_counter()
 simulate(s)
@@ -89,11 +90,11 @@ def integration_cost(scenario: Scenario, repeats: int) -> tuple[float, int]:
     """Best seconds of the time-stepping alone, and the number of steps."""
     dt = scenario.numerics.dt
     n_steps = vt.n_time_steps(scenario)
-    track, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
-    wheels = vt.assemble_wheels(scenario, n_steps * dt)
+    track, vehicle = assembly.assemble_track(scenario), assembly.assemble_vehicle(scenario)
+    wheels = assembly.assemble_wheels(scenario, n_steps * dt)
 
     def run():
-        state = vt.static_equilibrium(scenario, track, vehicle, wheels)
+        state = assembly.static_equilibrium(scenario, track, vehicle, wheels)
         vt.integrate(track, vehicle, wheels, state, n_steps, dt)
 
     return best_of(run, repeats), n_steps

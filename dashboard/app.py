@@ -35,7 +35,7 @@ from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of, warm_up, warm_u
 from dashboard.study_view import StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
-from model.fe_section import FEResult, stored_fe_result
+from model.fe.store import FEResult, stored_fe_result
 from model.params import SECTIONS, Scenario, ScenarioError
 from model.pipeline import STAGES, Results, SimulationError, StageCache, run, stage_keys
 

@@ -33,11 +33,12 @@ from dashboard import plots
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
 from dashboard.study_view import RESULTS, display_values, study_plots
 from dashboard.whatif import CURRENT_LABEL, WhatIfSession, load_session
-from model.__main__ import add_scenario_arguments, load_scenario
+from model.cli import add_scenario_arguments, load_scenario
 from model.params import display_label
 from model.pipeline import Results, SimulationError, StageCache, run
 from model.scenarios import CUSTOM, matching_preset
-from model.study import Study, aggregate, input_columns, read_study
+from model.study.definition import Study
+from model.study.tables import aggregate, input_columns, read_study
 
 REPORT_TITLE = "tunnelsettle report"
 # Panel's page template links its favicons from a CDN; empty values keep the file offline.
@@ -339,8 +340,8 @@ def build_study_report(table: pd.DataFrame, name: str | None = None) -> pn.Colum
     Parameters
     ----------
     table : pandas.DataFrame
-        A study's rows with their ``attrs`` (:func:`model.study.run_study`,
-        :func:`model.study.read_study`).
+        A study's rows with their ``attrs`` (:func:`model.study.execution.run_study`,
+        :func:`model.study.tables.read_study`).
     name : str, optional
         Name of the base scenario in the header; default its preset's name, or "custom".
     """

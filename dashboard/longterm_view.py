@@ -3,9 +3,10 @@
 The plots read ``Results.longterm`` (docs/model.md §10): settlement at the invert against years of
 service (log axis), the permanent strain and the stress ratio q_d/σ_s against depth with the
 depth that holds 90 % of the settlement, and the fit of a cyclic-triaxial calibration. The
-:class:`CalibrationPanel` uploads a triaxial CSV (``model.longterm.parse_triaxial_csv``), shows
-the fit and writes the fitted a, b, m into a :class:`~model.params.LongTerm` (Li & Selig, soil
-class "user"). Units on screen: mm, %, kPa.
+:class:`CalibrationPanel` uploads a triaxial CSV
+(``model.longterm.calibration.parse_triaxial_csv``), shows the fit and writes the fitted a, b, m
+into a :class:`~model.params.LongTerm` (Li & Selig, soil class "user"). Units on screen: mm, %,
+kPa.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import panel as pn
 import param
 
 from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
-from model.longterm import TriaxialData, fit_strain_law, parse_triaxial_csv
+from model.longterm.calibration import TriaxialData, fit_strain_law, parse_triaxial_csv
 from model.params import LongTerm
 from model.pipeline import Results
 

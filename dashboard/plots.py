@@ -18,7 +18,7 @@ import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used
 import numpy as np
 
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
-from model.fe_section import FEResult
+from model.fe.store import FEResult
 from model.params import DATA_DIR, Soil
 from model.pipeline import Results
 
@@ -339,7 +339,7 @@ def depth_profile_plot(
     """Peak dynamic displacement against depth below the invert, with the paper's points;
     pinned runs (``overlays``) are drawn under the current run, ``other_model`` (the same
     scenario with the other tunnel–soil model) as a faint dashed curve, and a stored FE result
-    of the same scenario (``fe_result``, model.fe_section) as a dotted curve."""
+    of the same scenario (``fe_result``, model.fe) as a dotted curve."""
     reference = paper_reference() if reference is None else reference
     current_label = "This model"
     if other_model is not None and results is not None:

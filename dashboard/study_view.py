@@ -9,7 +9,7 @@ a heat map of the mean over two, for the peak displacement at the invert and the
 settlement (when the pipeline reports ``longterm_settlement_m``), and the envelope of the
 peak-displacement depth profiles; once a study has rows, its report
 (:func:`dashboard.export.study_report_html`) can be downloaded. The study runs in its own
-thread on its own Dask cluster (:func:`model.study.run_study`), so the served app stays
+thread on its own Dask cluster (:func:`model.study.execution.run_study`), so the served app stays
 responsive; the page is updated on the session's event loop (``add_next_tick_callback``).
 """
 
@@ -32,7 +32,9 @@ from holoviews.streams import Pipe
 from dashboard.controls import clean_number, slider_step, step_decimals
 from dashboard.plots import MM, PLOT_OPTIONS
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
-from model.study import MAX_RUNS_UNCONFIRMED, aggregate, profile_depths, run_study
+from model.study.definition import MAX_RUNS_UNCONFIRMED
+from model.study.execution import run_study
+from model.study.tables import aggregate, profile_depths
 
 NONE = "(none)"
 RESULTS = {
@@ -199,8 +201,8 @@ class StudyView(pn.viewable.Viewer):
     scenario_source : callable
         Returns the current scenario (the base of a new study).
     scheduler : None, str or distributed.Client
-        Where studies run (see :func:`model.study.study_client`); None: ``$TUNNELSETTLE_SCHEDULER``
-        or a LocalCluster per study.
+        Where studies run (see :func:`model.study.execution.study_client`); None:
+        ``$TUNNELSETTLE_SCHEDULER`` or a LocalCluster per study.
     threaded : bool
         Run the study in its own thread (served app) or in the calling thread (tests).
     """

@@ -1,7 +1,7 @@
 """Mesh, time-step and boundary study of the FE section against the analytical 2D model.
 
-Prints the Markdown tables of docs/fe_section.md: elastic FE (model.fe_section.run_fe) and the
-analytical model (model.settlement through model.fe_section.analytical_profile) under the same
+Prints the Markdown tables of docs/fe_section.md: elastic FE (model.fe.analysis.run_fe) and the
+analytical model (model.soil.response through model.fe.analysis.analytical_profile) under the same
 load, a Hann pulse at the invert (50 kN/m peak, 0.4 s long in a 1 s record: band 1–4 Hz,
 λ_min = c₂/4 Hz = 8.95 m),
 without and with the soil's hysteretic damping. Run: ``python docs/fe_study.py`` (~15 min).
@@ -23,14 +23,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from model.fe_section import (  # noqa: E402
-    FEMesh,
-    analytical_profile,
-    load_band,
-    run_fe,
-    save_fe_result,
-    stored_fe_result,
-)
+from model.fe.analysis import analytical_profile, run_fe  # noqa: E402
+from model.fe.inputs import load_band  # noqa: E402
+from model.fe.mesh import FEMesh  # noqa: E402
+from model.fe.store import save_fe_result, stored_fe_result  # noqa: E402
 from model.params import Scenario  # noqa: E402
 
 DT_S, PULSE_S, PEAK_N_PER_M = 1e-3, 0.4, 50e3

@@ -4,8 +4,8 @@ Shaped like the paper's GDS test (75 kPa confining pressure, 1 Hz, 5000 cycles),
 published strain curve. Four cyclic deviator levels on one static strength; the strains follow
 Li & Selig's law ε_p = a (q_d/σ_s)^m N^b with the known values below, times independent
 log-normal noise of standard deviation NOISE in log ε_p (≈ 5 % scatter), from a fixed seed.
-``model.longterm.fit_strain_law`` on this file should recover a, b, m within their standard
-errors (tests/test_longterm.py checks it).
+``model.longterm.calibration.fit_strain_law`` on this file should recover a, b, m within their
+standard errors (tests/test_longterm.py checks it).
 
 Run from the repository root: ``python docs/make_triaxial_example.py``.
 """

@@ -16,7 +16,8 @@ sys.path.insert(0, str(ROOT))
 
 from model.params import Scenario, Tunnel  # noqa: E402
 from model.pipeline import StageCache, run  # noqa: E402
-from model.tunnel_soil_3d import point_load_response, receptance_2p5d  # noqa: E402
+from model.soil.moving_load_2p5d import receptance_2p5d  # noqa: E402
+from model.soil.point_load import point_load_response  # noqa: E402
 
 OUT = ROOT / "docs" / "reproduction.md"
 MM = 1e3

@@ -28,19 +28,14 @@ from typing import Any
 
 import numpy as np
 
-from model.longterm import (
-    LongTermResult,
-    StressResponse,
-    check_longterm_inputs,
-    long_term_settlement,
-    section_response,
-    section_transfer,
-)
+from model.longterm.geostatic import check_longterm_inputs
+from model.longterm.settlement import LongTermResult, long_term_settlement
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
-from model.settlement import COMPARISON_DEPTH_M, SoilResponse, response_tail
+from model.soil.response import COMPARISON_DEPTH_M, SoilResponse, response_tail
+from model.soil.stresses import StressResponse, section_response, section_transfer
 from model.spectra import one_sided_psd
-from model.vehicle_track import VehicleTrackResult, check_inputs, simulate
+from model.track.vehicle_track import VehicleTrackResult, check_inputs, simulate
 
 N_RAILS = 2  # both rails load the same tunnel section (docs/model.md §6)
 # invariant_warnings: growth of the peak with depth tolerated, relative to the invert peak (the
@@ -51,7 +46,7 @@ INVARIANT_TOLERANCE = 1e-6
 # (checked by the tests), so that no setting is silently left out of a cache key.
 VEHICLE_TRACK_NUMERICS = ("dt", "n_rail_modes", "rail_end_margin", "approach_distance")
 LOAD_NUMERICS = ("psd_segment",)
-# Numerics of the 2.5D model's wavenumber integral (model.tunnel_soil_3d.point_load_response):
+# Numerics of the 2.5D model's wavenumber integral (model.soil.point_load.point_load_response):
 # in the soil key only when tunnel.model is "2.5d", so they never invalidate a 2D result.
 WAVENUMBER_NUMERICS = ("n_wavenumbers", "max_wavenumber", "wavenumber_tolerance")
 SOIL_NUMERICS = (
@@ -64,6 +59,11 @@ SOIL_NUMERICS = (
     "kernel_samples_per_cycle",
     *WAVENUMBER_NUMERICS,
 )
+
+# Tunnel parameters read by the long-term stage only (the static stress state; the full-space
+# soil models have no ground surface): in the long-term key, not the soil key, so that changing
+# them re-runs the long-term stage alone. A soil model that reads one must take it off this list.
+LONGTERM_TUNNEL = ("axis_depth",)
 
 # The soil stage also yields the stresses under the invert (Results.stress): both come from
 # one evaluation of the tunnel–soil kernel, so they share a stage and its cache key.
@@ -265,7 +265,9 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     moving_load = scenario.tunnel.model == "2.5d"
     soil = {
         "upstream": load,
-        "tunnel": data["tunnel"],  # includes tunnel.model
+        "tunnel": {  # includes tunnel.model
+            name: value for name, value in data["tunnel"].items() if name not in LONGTERM_TUNNEL
+        },
         "soil": data["soil"],
         "numerics": pick(
             name for name in SOIL_NUMERICS if moving_load or name not in WAVENUMBER_NUMERICS
@@ -273,7 +275,11 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     }
     if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v
         soil["speed_kmh"] = data["train"]["speed_kmh"]
-    longterm = {"upstream": soil, "longterm": data["longterm"]}
+    longterm = {
+        "upstream": soil,
+        "longterm": data["longterm"],
+        "tunnel": {name: data["tunnel"][name] for name in LONGTERM_TUNNEL},
+    }
     # the transfer functions: the soil stage's inputs but the load, whose record's length and
     # step (which set the frequency grid) run() appends
     transfer = {name: value for name, value in soil.items() if name != "upstream"}
@@ -449,7 +455,7 @@ def check_record_padding(scenario: Scenario) -> None:
     """Refuse a padded record too short for the response at the deepest output depth.
 
     The soil stage's inverse FFT is periodic: a padded record shorter than the passage plus
-    the wave-travel tail to ``numerics.max_depth`` (``model.settlement.response_tail``) wraps
+    the wave-travel tail to ``numerics.max_depth`` (``model.soil.response.response_tail``) wraps
     the deep response onto itself, which lowers the deep peaks (e.g. by half at 35 m for a soft
     soil at 400 km/h) and can make them grow with depth.
 

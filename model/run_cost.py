@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import scipy.fft
 
 from model.params import Scenario
-from model.settlement import decimation_factor, response_tail
+from model.soil.response import decimation_factor, response_tail
 
 SLOW_RUN_SECONDS = 30.0
 # Refuse a run whose arrays need more than this fraction of the memory available now.
@@ -39,7 +39,7 @@ STEP_SECONDS = (0.73e-6, 1.94e-9, 1.85e-10, 0.218e-6)  # 1, N_m, N_m n_w, n_w
 SYNTHESIS_SECONDS = 0.36e-9  # per profile point and component
 SOIL_SECONDS = 9.2e-9  # per frequency, depth and (harmonic + BESSEL_HARMONICS)
 BESSEL_HARMONICS = 17
-# Stress stage (model.longterm.stress_response): six stress components, each with its transfer
+# Stress stage (model.soil.stresses.stress_response): six stress components, each with its transfer
 # function and spectrum (n_freq × n_depths, complex) and its history (n_depths × n_out), the
 # deviator history, and the inverse FFT's padded arrays as in the soil stage (a tracemalloc peak
 # of 12 MB against 16 MB counted this way, cheap scenario with 71 depths). Its time is about

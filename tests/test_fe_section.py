@@ -16,7 +16,18 @@ import pytest
 
 pytest.importorskip("openseespy.opensees")
 
-from model import fe_section as fe  # noqa: E402
+from model.fe.analysis import analytical_profile, gravity_state, run_fe  # noqa: E402
+from model.fe.build import FEUnavailableError, opensees  # noqa: E402
+from model.fe.cli import main  # noqa: E402
+from model.fe.inputs import (  # noqa: E402
+    drucker_prager_plane_strain,
+    geostatic,
+    load_band,
+    rayleigh_coefficients,
+    resample_load,
+)
+from model.fe.mesh import FEMesh  # noqa: E402
+from model.fe.store import save_fe_result, stored_fe_result  # noqa: E402
 from model.params import Scenario  # noqa: E402
 
 DT_S, PULSE_S = 1e-3, 0.4
@@ -32,7 +43,7 @@ def hann_pulse(peak_N_per_m: float = 50e3) -> np.ndarray:
 def test_rayleigh_damping_matches_half_the_loss_factor_at_both_ends():
     """ζ(f) = a₀/(4πf) + a₁πf equals η/2 at f_low and f_high (to rounding) and is below it
     between them (the Rayleigh curve is convex in f)."""
-    a0, a1 = fe.rayleigh_coefficients(0.06, 0.5, 10.0)
+    a0, a1 = rayleigh_coefficients(0.06, 0.5, 10.0)
 
     def zeta(f):
         return a0 / (4 * math.pi * f) + a1 * math.pi * f
@@ -46,9 +57,9 @@ def test_drucker_prager_plane_strain_match():
     """Plane-strain match: for φ = 0, √J₂ = c (σ_Y = √3 c in OpenSees' ‖s‖ ≤ √(2/3) σ_Y, and
     ρ = 0); for φ = 30°, tan²φ = 1/3, so α = (1/√3)/√13 = 0.160 and k = 3c/√13 = 0.832 c, with
     ρ = √2 α and σ_Y = √3 k (exact expressions, rounding tolerance)."""
-    sigma_y, rho = fe.drucker_prager_plane_strain(10e3, 0.0)
+    sigma_y, rho = drucker_prager_plane_strain(10e3, 0.0)
     assert sigma_y == pytest.approx(math.sqrt(3) * 10e3, rel=1e-12) and rho == 0.0
-    sigma_y, rho = fe.drucker_prager_plane_strain(10e3, 30.0)
+    sigma_y, rho = drucker_prager_plane_strain(10e3, 30.0)
     root = math.sqrt(9 + 12 / 3)
     assert rho == pytest.approx(math.sqrt(2) * (1 / math.sqrt(3)) / root, rel=1e-12)
     assert sigma_y == pytest.approx(math.sqrt(3) * 3 * 10e3 / root, rel=1e-12)
@@ -57,7 +68,7 @@ def test_drucker_prager_plane_strain_match():
 def test_resampling_keeps_the_impulse():
     """Box averaging over k samples keeps ∫q dt exactly when k divides the record length."""
     q = hann_pulse()
-    resampled, dt = fe.resample_load(q, DT_S, 0.01)
+    resampled, dt = resample_load(q, DT_S, 0.01)
     assert dt == pytest.approx(0.01)
     assert resampled.sum() * dt == pytest.approx(q.sum() * DT_S, rel=1e-12)
 
@@ -67,8 +78,8 @@ def _gravity_errors(law: str, size: float):
     """Max |σ − σ_geostatic| over all elements for σ_xx and σ_yy, in units of γR."""
     scenario = Scenario.paper()
     radius = 20.0
-    x, y, stress = fe.gravity_state(scenario, law, fe.FEMesh(radius, element_size=size))
-    field = fe.geostatic(scenario)
+    x, y, stress = gravity_state(scenario, law, FEMesh(radius, element_size=size))
+    field = geostatic(scenario)
     if law == "elastic":
         expected_xx, expected_yy = -field.horizontal(y), -field.vertical(y)
     else:
@@ -103,13 +114,13 @@ def test_gravity_stage_of_the_plastic_law_carries_the_k0_deviator():
 
 
 # ---- elastic FE against the analytical model ----------------------------------------------------
-def _elastic_error(mesh: fe.FEMesh, loss_factor: float = 0.0):
+def _elastic_error(mesh: FEMesh, loss_factor: float = 0.0):
     """(FE peak − analytical peak)/analytical invert peak at every FE depth down to 12 m."""
     scenario = Scenario.paper()
     scenario.soil.shear_loss_factor = loss_factor
-    result = fe.run_fe(scenario, "elastic", mesh=mesh, load=(hann_pulse(), DT_S))
+    result = run_fe(scenario, "elastic", mesh=mesh, load=(hann_pulse(), DT_S))
     keep = result.depth_m <= 12.0
-    exact = fe.analytical_profile(scenario, hann_pulse(), DT_S, result.depth_m[keep])
+    exact = analytical_profile(scenario, hann_pulse(), DT_S, result.depth_m[keep])
     return (result.peak_disp_m[keep] - exact) / exact[0]
 
 
@@ -122,10 +133,10 @@ def test_elastic_fe_agrees_with_the_analytical_model_and_converges():
     largest difference (measured 0.35 %, and 0.34 % at 2×: the FE approaches the analytical model
     until a floor of ~0.3 % is reached, the boundary at R = 20 m and the analytical record's
     finite padding)."""
-    coarse = np.abs(_elastic_error(fe.FEMesh(outer_radius=20.0))).max()
+    coarse = np.abs(_elastic_error(FEMesh(outer_radius=20.0))).max()
     assert coarse < 0.01
-    wavelength = fe.load_band(hann_pulse(), DT_S, Scenario.paper().soil.s_wave_speed)
-    refined = fe.FEMesh(
+    wavelength = load_band(hann_pulse(), DT_S, Scenario.paper().soil.s_wave_speed)
+    refined = FEMesh(
         outer_radius=20.0,
         element_size=wavelength.shortest_wavelength_m / 9,
         steps_per_period=30,
@@ -134,7 +145,7 @@ def test_elastic_fe_agrees_with_the_analytical_model_and_converges():
 
 
 # ---- plastic soil -------------------------------------------------------------------------------
-PLASTIC_MESH = fe.FEMesh(outer_radius=12.0, plastic_radius=8.0)
+PLASTIC_MESH = FEMesh(outer_radius=12.0, plastic_radius=8.0)
 
 
 def test_very_strong_soil_leaves_no_residual():
@@ -143,7 +154,7 @@ def test_very_strong_soil_leaves_no_residual():
     1e-6 of the 1 mm peak, far above the solver's ~1e-13 m), and both passages peak alike."""
     scenario = Scenario.paper()
     scenario.longterm.undrained_strength = 1e9
-    result = fe.run_fe(
+    result = run_fe(
         scenario, "mohr_coulomb", passages=2, mesh=PLASTIC_MESH, load=(hann_pulse(), DT_S)
     )
     assert np.abs(result.residual_per_passage_m).max() < 1e-9
@@ -159,8 +170,8 @@ def test_residual_grows_with_the_load():
     element yields is decided by rounding (no element yielded on a machine with Debian 12's
     OpenBLAS, while earlier runs saw a small residual); at 50 kN/m the residual is 0.05 mm."""
     scenario = Scenario.paper()
-    small = fe.run_fe(scenario, "mohr_coulomb", mesh=PLASTIC_MESH, load=(hann_pulse(50e3), DT_S))
-    large = fe.run_fe(
+    small = run_fe(scenario, "mohr_coulomb", mesh=PLASTIC_MESH, load=(hann_pulse(50e3), DT_S))
+    large = run_fe(
         scenario, "mohr_coulomb", passages=2, mesh=PLASTIC_MESH, load=(hann_pulse(100e3), DT_S)
     )
     assert 0 < small.residual_disp_m[0] < large.residual_per_passage_m[0, 0]
@@ -172,28 +183,28 @@ def test_mesh_too_coarse_for_the_band_is_refused():
     """h = 3 m > λ_min/6 = 1.49 m for the pulse: ValueError naming the size, the wavelength and
     the frequency."""
     with pytest.raises(ValueError, match=r"element_size = 3 m.*8\.95 m.*4 Hz.*1\.49 m"):
-        fe.run_fe(Scenario.paper(), mesh=fe.FEMesh(element_size=3.0), load=(hann_pulse(), DT_S))
+        run_fe(Scenario.paper(), mesh=FEMesh(element_size=3.0), load=(hann_pulse(), DT_S))
 
 
 def test_bad_law_and_passages_are_refused():
     """Unknown soil law and zero passages: ValueError naming the parameter."""
     with pytest.raises(ValueError, match="soil_law"):
-        fe.run_fe(Scenario.paper(), "cam_clay", load=(hann_pulse(), DT_S))
+        run_fe(Scenario.paper(), "cam_clay", load=(hann_pulse(), DT_S))
     with pytest.raises(ValueError, match="passages"):
-        fe.run_fe(Scenario.paper(), passages=0, load=(hann_pulse(), DT_S))
+        run_fe(Scenario.paper(), passages=0, load=(hann_pulse(), DT_S))
 
 
 def test_missing_opensees_gives_a_one_line_message(monkeypatch, capsys, tmp_path):
     """Without an importable openseespy, the library call and the CLI both name the extra and
     the Debian packages in one line; the CLI exits with 2."""
     monkeypatch.setitem(sys.modules, "openseespy.opensees", None)
-    with pytest.raises(fe.FEUnavailableError) as info:
-        fe.opensees()
+    with pytest.raises(FEUnavailableError) as info:
+        opensees()
     message = str(info.value)
     assert 'pip install ".[fe]"' in message and "libopenblas0" in message
     assert "liblapack3" in message and "\n" not in message
     with pytest.raises(SystemExit) as exit_info:
-        fe.main(["--preset", "paper", "--out", str(tmp_path)])
+        main(["--preset", "paper", "--out", str(tmp_path)])
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1 and "[fe]" in err
@@ -203,15 +214,13 @@ def test_results_are_stored_and_found_by_scenario(tmp_path):
     """A stored result is found again for the same scenario (and law), not for a changed one;
     arrays and metadata survive the round trip exactly."""
     scenario = Scenario.paper()
-    result = fe.run_fe(
-        scenario, "elastic", mesh=fe.FEMesh(outer_radius=8.0), load=(hann_pulse(), DT_S)
-    )
-    fe.save_fe_result(result, tmp_path)
-    found = fe.stored_fe_result(scenario, tmp_path)
+    result = run_fe(scenario, "elastic", mesh=FEMesh(outer_radius=8.0), load=(hann_pulse(), DT_S))
+    save_fe_result(result, tmp_path)
+    found = stored_fe_result(scenario, tmp_path)
     assert found is not None and found.soil_law == "elastic"
     np.testing.assert_array_equal(found.peak_disp_m, result.peak_disp_m)
     assert found.mesh == result.mesh and found.scenario_json == result.scenario_json
-    assert fe.stored_fe_result(scenario, tmp_path, "mohr_coulomb") is None
+    assert stored_fe_result(scenario, tmp_path, "mohr_coulomb") is None
     changed = scenario.copy()
     changed.soil.youngs_modulus *= 1.1
-    assert fe.stored_fe_result(changed, tmp_path) is None
+    assert stored_fe_result(changed, tmp_path) is None

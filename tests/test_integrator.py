@@ -1,7 +1,7 @@
 """Zhai's explicit integrator (φ = ψ = ½, φ = ψ = 0 on the first step) on one degree of freedom.
 
 The SDOF x'' + 2ζω x' + ω² x = f(t) is stepped with the kernel's own update,
-``model.vehicle_track.zhai_predict``, and compared with its exact solution.
+``model.track.kernels.zhai_predict``, and compared with its exact solution.
 """
 
 import math
@@ -9,7 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from model.vehicle_track import ZHAI_PHI, ZHAI_PSI, zhai_damped_limit, zhai_predict
+from model.track.kernels import zhai_predict
+from model.track.vehicle_track import ZHAI_PHI, ZHAI_PSI, zhai_damped_limit
 
 OMEGA = 2.0 * math.pi  # rad/s: period 1 s
 

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 from scipy import integrate, signal
 
-from model.irregularity import (
+from model.params import DATA_DIR, Irregularity
+from model.track.irregularity import (
     fra_psd,
     load_profile_csv,
     profile_for,
     series_wavenumbers,
     synthesize_profile,
 )
-from model.params import DATA_DIR, Irregularity
 
 OMEGA_C = 0.8245  # rad/m, FRA cut-off
 DEFAULT_BAND = (1.0, 50.0)

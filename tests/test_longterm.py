@@ -12,29 +12,30 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from model import longterm
-from model.__main__ import main
-from model.longterm import (
-    StressResponse,
-    check_longterm_inputs,
+from model.cli import main
+from model.longterm.calibration import fit_strain_law, load_triaxial_csv
+from model.longterm.cycles import range_weighted_cycles
+from model.longterm.geostatic import check_longterm_inputs, static_state
+from model.longterm.settlement import (
+    N_YEARS,
     depth_holding_fraction,
-    deviator_stress,
-    fit_strain_law,
     layered_settlement_m,
-    load_triaxial_csv,
     long_term_settlement,
-    permanent_strain_percent,
-    plane_strain_stress_transfer,
-    range_weighted_cycles,
-    static_state,
-    stress_components,
-    stress_response,
     trapezoid_thickness,
 )
+from model.longterm.strain_laws import permanent_strain_percent
 from model.params import DATA_DIR, LongTerm, Scenario, Soil, Tunnel
 from model.pipeline import STAGES, StageCache, run
-from model.settlement import kernel_sample_bins, soil_response
-from model.tunnel_soil import invert_receptance
+from model.soil import stresses
+from model.soil.response import kernel_sample_bins, soil_response
+from model.soil.section_2d import invert_receptance
+from model.soil.stresses import (
+    StressResponse,
+    deviator_stress,
+    plane_strain_stress_transfer,
+    stress_components,
+    stress_response,
+)
 
 SYNTHETIC_CSV = DATA_DIR / "triaxial_synthetic.csv"
 
@@ -182,7 +183,7 @@ def test_deviator_from_the_stress_stage_matches_the_cavity_under_a_slow_pulse(mo
     scenario.numerics.soil_max_frequency = 5.0
     scenario.numerics.max_depth = 11.0
     monkeypatch.setattr(
-        longterm,
+        stresses,
         "invert_transfer",
         lambda f, d, s: (
             invert_receptance(f, d, s.tunnel, s.soil, 0),
@@ -209,7 +210,7 @@ def test_one_kernel_pass_gives_exactly_the_separate_soil_and_stress_results(chea
     scenario.tunnel.model = model
     load = run(scenario, cache=None).load
     q, dt = load.line_load_N_per_m, float(load.t_s[1] - load.t_s[0])
-    soil, stress = longterm.section_response(q, dt, scenario)
+    soil, stress = stresses.section_response(q, dt, scenario)
     alone = soil_response(
         q, dt, scenario.tunnel, scenario.soil, scenario.numerics, speed_m_s=scenario.train.speed
     )
@@ -232,7 +233,7 @@ def test_deviator_peak_converges_as_the_record_is_padded(cheap_scenario):
 
     The peak invert deviator with padding 8 and 16 agree to 0.5 % (the padding error of the
     displacement, which has the harder ln ω DC term, is shown below 1 % at 8 in
-    test_settlement).
+    test_soil_response).
     """
     scenario = cheap_scenario()
     vt_results = run(scenario, cache=None)
@@ -253,11 +254,11 @@ def paper_load():
     return load.line_load_N_per_m, float(load.t_s[1] - load.t_s[0])
 
 
-def _transfer(load, scenario, samples_per_cycle: int) -> longterm.SectionTransfer:
+def _transfer(load, scenario, samples_per_cycle: int) -> stresses.SectionTransfer:
     """section_transfer with the given kernel sampling (0: every frequency)."""
     scenario = scenario.copy()
     scenario.numerics.kernel_samples_per_cycle = samples_per_cycle
-    return longterm.section_transfer(*load, scenario)
+    return stresses.section_transfer(*load, scenario)
 
 
 def _worst_error(transfer, exact) -> float:
@@ -335,8 +336,8 @@ def test_sampled_kernel_leaves_the_paper_results_unchanged(paper_load, model):
     scenario = Scenario.paper()
     scenario.tunnel.model = model
     exact = _transfer(paper_load, scenario, 0)
-    soil_exact, stress_exact = longterm.section_response(*paper_load, scenario, exact)
-    soil, stress = longterm.section_response(*paper_load, scenario)
+    soil_exact, stress_exact = stresses.section_response(*paper_load, scenario, exact)
+    soil, stress = stresses.section_response(*paper_load, scenario)
     np.testing.assert_allclose(soil.peak_disp_m, soil_exact.peak_disp_m, rtol=1e-5, atol=0)
     np.testing.assert_allclose(stress.deviator_Pa, stress_exact.deviator_Pa, rtol=1e-4, atol=0)
 
@@ -534,8 +535,8 @@ def test_summary_and_result_fields(results):
 
 def test_impossible_static_states_are_refused_before_computing():
     scenario = Scenario.paper()
-    scenario.longterm.axis_depth = 2.0
-    with pytest.raises(ValueError, match=r"longterm.axis_depth = 2 m .* outer radius 3 m"):
+    scenario.tunnel.axis_depth = 2.0
+    with pytest.raises(ValueError, match=r"tunnel.axis_depth = 2 m .* outer radius 3 m"):
         check_longterm_inputs(scenario)
     scenario = Scenario.paper()
     scenario.soil.density = 1000.0  # the lower bound: no effective stress
@@ -554,7 +555,7 @@ def test_command_line_writes_the_settlement_and_depth_tables(tmp_path):
     )
     assert code == 0
     over_time = np.loadtxt(out / "longterm_settlement.csv", delimiter=",", skiprows=1)
-    assert over_time.shape == (longterm.N_YEARS, 2) and np.all(np.diff(over_time[:, 1]) > 0)
+    assert over_time.shape == (N_YEARS, 2) and np.all(np.diff(over_time[:, 1]) > 0)
     header = (out / "longterm_depth.csv").read_text().splitlines()[0].split(",")
     assert header[0] == "depth_m" and "strain_percent" in header and "deviator_Pa" in header
     assert np.loadtxt(out / "longterm_depth.csv", delimiter=",", skiprows=1).shape[0] == 11

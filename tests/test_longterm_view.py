@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from dashboard import longterm_view as view
-from model.longterm import load_triaxial_csv
+from model.longterm.calibration import load_triaxial_csv
 from model.params import DATA_DIR, LongTerm
 from model.pipeline import run
 

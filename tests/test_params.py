@@ -294,3 +294,17 @@ def test_cross_parameter_validation_lists_every_problem():
 
 def test_sections_cover_every_scenario_parameter():
     assert set(SECTIONS) == set(Scenario.param) - {"name"}
+
+
+def test_a_scenario_file_with_the_former_axis_depth_path_still_loads():
+    """The axis depth moved from longterm to tunnel (issue 23): a file written before, with
+    longterm.axis_depth, loads to the same scenario; giving both paths with different values is
+    refused, naming both."""
+    current = Scenario.paper()
+    current.tunnel.axis_depth = 22.0
+    data = current.to_dict()
+    data["longterm"]["axis_depth"] = data["tunnel"].pop("axis_depth")
+    assert Scenario.from_json(json.dumps(data)).to_dict() == current.to_dict()
+    data["tunnel"]["axis_depth"] = 21.0
+    with pytest.raises(ValueError, match=r"longterm.axis_depth = 22.0 and tunnel.axis_depth = 21"):
+        Scenario.from_json(json.dumps(data))

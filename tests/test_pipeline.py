@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from model import pipeline
-from model.__main__ import main
+from model.cli import main
 from model.params import Numerics, Scenario, ScenarioError
 from model.pipeline import StageCache, run
 
@@ -125,7 +125,7 @@ def test_a_new_load_on_the_same_record_grid_reuses_the_soil_transfer_bit_for_bit
 
 
 def test_a_transfer_from_another_grid_is_refused(cheap_scenario):
-    from model.longterm import section_response, section_transfer
+    from model.soil.stresses import section_response, section_transfer
 
     results = run(cheap_scenario(), cache=None)
     q, dt = results.load.line_load_N_per_m, float(results.load.t_s[1])
@@ -204,6 +204,26 @@ def test_every_numerics_parameter_is_in_some_stage_key():
 
 
 @pytest.mark.parametrize("model", ["2d", "2.5d"])
+def test_the_axis_depth_re_runs_the_long_term_stage_only(cheap_scenario, model):
+    """tunnel.axis_depth is read by the static stress state alone (pipeline.LONGTERM_TUNNEL): a
+    change leaves the soil key and the transfer functions' key as they were, and a cached run
+    serves every stage but the long-term one, whose static strength changes with the depth."""
+    scenario = cheap_scenario()
+    scenario.tunnel.model = model
+    before = pipeline.stage_keys(scenario)
+    scenario.tunnel.axis_depth = 25.0
+    after = pipeline.stage_keys(scenario)
+    assert {stage for stage in before if before[stage] != after[stage]} == {"longterm"}
+    if model == "2.5d":
+        return  # the keys are the point; one run of the cheap 2D case checks the cache
+    cache = StageCache()
+    shallow = run(cheap_scenario(), cache=cache)
+    deep = run(scenario, cache=cache)
+    assert deep.cached_stages == ("vehicle_track", "load", "soil")
+    assert np.all(deep.longterm.strength_Pa > shallow.longterm.strength_Pa)
+
+
+@pytest.mark.parametrize("model", ["2d", "2.5d"])
 def test_kernel_sampling_changes_the_soil_keys_only(model):
     """The kernel sampling changes the transfer functions (tests/test_longterm.py): a cached
     soil stage or transfer made with another sampling must not be served."""
@@ -264,7 +284,7 @@ def test_inconsistent_scenario_is_refused_before_any_computation(cheap_scenario)
 def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch, cheap_scenario):
     """Δt = 2.5e-4 s is beyond the explicit limit; with the input check bypassed the run
     diverges, and the pipeline refuses to feed a truncated record to the soil stage."""
-    from model import vehicle_track
+    from model.track import vehicle_track
 
     scenario = cheap_scenario()
     scenario.numerics.dt = 2.5e-4

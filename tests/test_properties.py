@@ -32,7 +32,7 @@ from hypothesis import strategies as st
 from model.params import SECTIONS, Count, Quantity, Scenario
 from model.pipeline import INVARIANT_TOLERANCE, SimulationError, run
 from model.run_cost import SlowRunWarning, estimate_run
-from model.vehicle_track import check_inputs
+from model.track.vehicle_track import check_inputs
 
 RUN_BUDGET_S = 1.0  # estimated seconds above which an example stops after the input checks
 PIPELINE_SECTIONS = tuple(s for s in SECTIONS if s != "longterm")  # stages on this branch

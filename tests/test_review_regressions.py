@@ -2,7 +2,7 @@
 
 import pytest
 
-from model.longterm import range_weighted_cycles
+from model.longterm.cycles import range_weighted_cycles
 from model.params import LongTerm
 from model.pipeline import run
 
@@ -54,7 +54,7 @@ def test_a_passage_recorded_with_the_soil_already_loaded_counts_at_least_one_cyc
 def test_a_byte_order_mark_does_not_drop_the_first_row_of_a_headerless_triaxial_csv():
     """Before the fix "\\ufeff10" was not a number, so the first data row was taken for a
     header and silently dropped (5 points read from 6)."""
-    from model.longterm import parse_triaxial_csv
+    from model.longterm.calibration import parse_triaxial_csv
 
     rows = "10,1.0,20,100\n100,1.2,20,100\n1000,1.4,20,100\n10,2.0,40,100\n100,2.3,40,100\n"
     data = parse_triaxial_csv("\ufeff" + rows + "1000,2.6,40,100\n", "bom.csv")
@@ -86,8 +86,8 @@ def test_the_run_estimate_counts_the_stresses(cheap_scenario):
     cover the measured peak of the stage (an upper count: sizes, not timings)."""
     import tracemalloc
 
-    from model.longterm import section_response
     from model.run_cost import estimate_run
+    from model.soil.stresses import section_response
 
     scenario = cheap_scenario()
     scenario.numerics.n_depths = 71

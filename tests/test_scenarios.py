@@ -1,4 +1,4 @@
-"""Presets, train types, URL overrides (model/scenarios.py) and display units (model/params.py)."""
+"""Presets, train types, URL overrides (model/scenarios.py); display units (params/display.py)."""
 
 import pytest
 

@@ -21,24 +21,12 @@ import pandas as pd
 import pytest
 from distributed import Client
 
-from model import study as study_module
 from model.pipeline import run
-from model.study import (
-    MAX_RUNS_UNCONFIRMED,
-    SCHEDULER_ENV,
-    Study,
-    aggregate,
-    define_study,
-    execute_study,
-    load_study,
-    main,
-    parse_values,
-    profile_depths,
-    read_study,
-    run_study,
-    save_study,
-    study_client,
-)
+from model.study import execution as study_module
+from model.study.cli import main, parse_values
+from model.study.definition import MAX_RUNS_UNCONFIRMED, Study, define_study
+from model.study.execution import SCHEDULER_ENV, execute_study, run_study, study_client
+from model.study.tables import aggregate, load_study, profile_depths, read_study, save_study
 
 ROOT = Path(__file__).resolve().parent.parent
 CLUSTER_START_S = 120.0  # cold imports in fresh processes on a busy 2-core machine

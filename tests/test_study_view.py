@@ -3,7 +3,7 @@ the study report (dashboard/export.py) and its command line.
 
 The view's own logic is tested with ``run_study`` replaced by the same study run in this
 process (no cluster; the Dask path itself is covered by tests/test_study.py). Plots are checked
-against :func:`model.study.aggregate` of the rows, exactly (same arithmetic, same order).
+against :func:`model.study.tables.aggregate` of the rows, exactly (same arithmetic, same order).
 """
 
 from __future__ import annotations
@@ -31,9 +31,11 @@ from dashboard.study_view import (
     study_parameters,
     study_plots,
 )
-from model import study as study_module
 from model.params import Scenario
-from model.study import aggregate, define_study, run_summary, save_study
+from model.study import execution as study_module
+from model.study.definition import define_study
+from model.study.execution import run_summary
+from model.study.tables import aggregate, save_study
 
 
 def _in_process_study(

@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 
 from model import pipeline, run_cost
-from model.__main__ import main
+from model.cli import main
 from model.params import DATA_DIR, Scenario, ScenarioError
 from model.pipeline import StageCache, invariant_warnings, run, stage_keys
 from model.run_cost import SlowRunWarning, estimate_run
-from model.settlement import SoilResponse
-from model.tunnel_soil import invert_receptance
+from model.soil.response import SoilResponse
+from model.soil.section_2d import invert_receptance
 
 CHEAP_SET = [
     "--preset",
@@ -114,8 +114,8 @@ def test_2_a_thick_lining_breaks_the_thin_ring_model():
 
 def test_2_a_tunnel_above_the_ground_surface_is_refused():
     scenario = Scenario.paper()
-    scenario.longterm.axis_depth = 2.0
-    with pytest.raises(ScenarioError, match=r"longterm\.axis_depth = 2 m .*above the ground"):
+    scenario.tunnel.axis_depth = 2.0
+    with pytest.raises(ScenarioError, match=r"tunnel\.axis_depth = 2 m .*above the ground"):
         scenario.validate()
 
 
@@ -238,7 +238,7 @@ def test_6_an_unwritable_output_is_refused_before_computing(tmp_path, capsys, mo
     def must_not_run(*args, **kwargs):
         raise AssertionError("the run started before the output path was checked")
 
-    monkeypatch.setattr("model.__main__.run", must_not_run)
+    monkeypatch.setattr("model.cli.run", must_not_run)
     with pytest.raises(SystemExit) as info:
         main([*CHEAP_SET, "--out", str(out)])
     assert info.value.code == 2
@@ -338,7 +338,7 @@ def test_9_the_message_names_the_parameter_at_fault(path, value):
 )
 def test_9_the_stability_refusal_names_the_part_that_sets_the_limit(path, value, named):
     """It used to name the rail modes whatever set the limit (a stiff pad, a damper...)."""
-    from model.vehicle_track import check_inputs
+    from model.track.vehicle_track import check_inputs
 
     scenario = Scenario.preset("single_bogie")
     scenario.set_value(path, value)
@@ -382,7 +382,7 @@ def test_10_non_utf8_files_are_named_errors(tmp_path):
 
 
 def test_10_a_profile_csv_with_a_bom_loads(tmp_path):
-    from model.irregularity import load_profile_csv
+    from model.track.irregularity import load_profile_csv
 
     path = tmp_path / "bom.csv"
     path.write_bytes(b"\xef\xbb\xbfx_m,eta_mm\n0,1\n1,2\n")
@@ -418,7 +418,8 @@ def test_docs_table_lists_every_bound_as_declared():
     """docs/validity.md has one 'bound' row per bounded number, with the declared range."""
     from pathlib import Path
 
-    from model.params import SECTIONS, Count, Quantity, _format_range
+    from model.params import SECTIONS, Count, Quantity
+    from model.params.quantities import _format_range
 
     text = (Path(__file__).resolve().parent.parent / "docs" / "validity.md").read_text()
     rows = {

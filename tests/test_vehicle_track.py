@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 from scipy.signal import find_peaks
 
-import model.irregularity
-from model import vehicle_track as vt
+import model.track.irregularity
 from model.params import Scenario, ScenarioError
-from model.vehicle_track import check_inputs, simulate, stable_time_step
+from model.track import assembly, kernels
+from model.track import vehicle_track as vt
+from model.track.vehicle_track import check_inputs, simulate, stable_time_step
 
 TABLE_1_WHEEL_LOAD = 61.1e3  # N, paper Table 1 (axle 122 kN)
 
@@ -63,7 +64,9 @@ def test_static_wheel_loads_are_table_1(single_bogie):
     printed precision (±0.05 kN); equal to Vehicle.static_wheel_load to rounding (1e-12)."""
     scenario = Scenario.paper()
     scenario.train.single_bogie = single_bogie
-    loads = vt.static_wheel_loads(vt.assemble_vehicle(scenario), vt.assemble_wheels(scenario, 1.0))
+    loads = assembly.static_wheel_loads(
+        assembly.assemble_vehicle(scenario), assembly.assemble_wheels(scenario, 1.0)
+    )
     assert loads.size == scenario.train.n_wheels
     np.testing.assert_allclose(loads, scenario.vehicle.static_wheel_load, rtol=1e-12)
     assert loads[0] == pytest.approx(TABLE_1_WHEEL_LOAD, abs=50.0)
@@ -74,11 +77,11 @@ def test_vehicle_mass_and_gravity_are_the_halved_car():
     (a quarter car body for the single bogie), exactly."""
     scenario = Scenario.paper()
     veh = scenario.vehicle
-    full = vt.assemble_vehicle(scenario)
+    full = assembly.assemble_vehicle(scenario)
     car = veh.car_body_mass + 2 * veh.bogie_mass + 4 * veh.wheelset_mass
     np.testing.assert_allclose(full.gravity_force.sum(axis=1), car * 9.81 / 2, rtol=1e-14)
     scenario.train.single_bogie = True
-    bogie = vt.assemble_vehicle(scenario)
+    bogie = assembly.assemble_vehicle(scenario)
     expected = (veh.car_body_mass / 4 + veh.bogie_mass / 2 + veh.wheelset_mass) * 9.81
     assert bogie.gravity_force.sum() == pytest.approx(expected, rel=1e-14)
 
@@ -116,9 +119,9 @@ def test_static_track_solution_equals_dense_solve(modes_per_spacing):
     scenario = smooth_single_bogie()
     n = round(scenario.rail_length / scenario.track.block_spacing)
     scenario.numerics.n_rail_modes = round(modes_per_spacing * n)
-    track, wheels = vt.assemble_track(scenario), vt.assemble_wheels(scenario, 1.0)
-    loads = vt.static_wheel_loads(vt.assemble_vehicle(scenario), wheels)
-    q, s = vt.track_equilibrium(track, track.mode_shapes(wheels.x0) @ loads)
+    track, wheels = assembly.assemble_track(scenario), assembly.assemble_wheels(scenario, 1.0)
+    loads = assembly.static_wheel_loads(assembly.assemble_vehicle(scenario), wheels)
+    q, s = assembly.track_equilibrium(track, track.mode_shapes(wheels.x0) @ loads)
     blocks = np.array([track.block_mode_weights(i) @ s for i in range(1, n)])
     q_dense, blocks_dense = dense_static_track(scenario, wheels.x0, loads)
     np.testing.assert_allclose(q, q_dense, atol=1e-9 * np.abs(q_dense).max())
@@ -135,10 +138,10 @@ def test_kernel_track_accelerations_equal_dense_equations(modes_per_spacing):
     n = round(scenario.rail_length / scenario.track.block_spacing)
     scenario.numerics.n_rail_modes = round(modes_per_spacing * n)
     loads = np.array([61e3, 55e3])
-    tr, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
-    wheels = vt.assemble_wheels(scenario, 1.0, prescribed_load_N=loads)
+    tr, vehicle = assembly.assemble_track(scenario), assembly.assemble_vehicle(scenario)
+    wheels = assembly.assemble_wheels(scenario, 1.0, prescribed_load_N=loads)
     rng = np.random.default_rng(7)
-    state = vt.static_equilibrium(scenario, tr, vehicle, wheels)
+    state = assembly.static_equilibrium(scenario, tr, vehicle, wheels)
     for name in ("q", "qd", "s", "sd"):
         getattr(state, name)[:] = rng.standard_normal(getattr(state, name).size) * 1e-4
     vt.integrate(tr, vehicle, wheels, state, 0, 1e-4)  # zero steps: accelerations at t = 0 only
@@ -170,10 +173,14 @@ def test_kernel_records_have_one_numba_type_across_scenarios():
     first, second = Scenario.paper(), smooth_single_bogie()
     second.train.speed_kmh = 60
     second.track.block_mass = 150
-    for assemble in (vt.assemble_track, vt.assemble_vehicle, lambda s: vt.assemble_wheels(s, 1.0)):
+    for assemble in (
+        assembly.assemble_track,
+        assembly.assemble_vehicle,
+        lambda s: assembly.assemble_wheels(s, 1.0),
+    ):
         assert numba.typeof(assemble(first)) == numba.typeof(assemble(second))
-    assert numba.typeof(vt.assemble_wheels(second, 1.0)) == numba.typeof(
-        vt.assemble_wheels(second, 1.0, prescribed_load_N=[1000, 2000])
+    assert numba.typeof(assembly.assemble_wheels(second, 1.0)) == numba.typeof(
+        assembly.assemble_wheels(second, 1.0, prescribed_load_N=[1000, 2000])
     )
 
 
@@ -181,16 +188,16 @@ def test_kernel_records_have_one_numba_type_across_scenarios():
 def test_prescribed_loads_are_checked(loads):
     """One non-negative load per wheel, else ValueError naming the argument."""
     with pytest.raises(ValueError, match=r"prescribed_load_N = .* needs 2 loads ≥ 0 N"):
-        vt.assemble_wheels(smooth_single_bogie(), 1.0, prescribed_load_N=loads)
+        assembly.assemble_wheels(smooth_single_bogie(), 1.0, prescribed_load_N=loads)
 
 
 def test_hertz_law():
     """p = (δ/G)^{3/2} for δ > 0 and 0 otherwise (the wheel has left the rail)."""
     g = Scenario().track.hertz_constant
     load = 61140.825
-    assert vt.hertz_force(g * load ** (2 / 3), g) == pytest.approx(load, rel=1e-13)
-    assert vt.hertz_force(0.0, g) == 0.0
-    assert vt.hertz_force(-1e-6, g) == 0.0
+    assert kernels.hertz_force(g * load ** (2 / 3), g) == pytest.approx(load, rel=1e-13)
+    assert kernels.hertz_force(0.0, g) == 0.0
+    assert kernels.hertz_force(-1e-6, g) == 0.0
 
 
 def test_static_start_is_equilibrium_with_hertz_compression():
@@ -198,10 +205,10 @@ def test_static_start_is_equilibrium_with_hertz_compression():
     is at rest: its accelerations are below 1e-6 g (the kernel's Chebyshev mode shapes agree
     with NumPy's sines to ~1e-13, i.e. force errors of ~1e-4 N)."""
     scenario = smooth_single_bogie()
-    track, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
-    wheels = vt.assemble_wheels(scenario, 1.0)
-    state = vt.static_equilibrium(scenario, track, vehicle, wheels)
-    loads = vt.static_wheel_loads(vehicle, wheels)
+    track, vehicle = assembly.assemble_track(scenario), assembly.assemble_vehicle(scenario)
+    wheels = assembly.assemble_wheels(scenario, 1.0)
+    state = assembly.static_equilibrium(scenario, track, vehicle, wheels)
+    loads = assembly.static_wheel_loads(vehicle, wheels)
     rail = track.mode_shapes(wheels.x0).T @ state.q
     compression = state.u[[3, 4]] - rail
     np.testing.assert_allclose(compression, scenario.track.hertz_compression(loads), rtol=1e-12)
@@ -280,10 +287,12 @@ def test_moving_constant_load_on_simply_supported_beam():
     n_steps = vt.n_time_steps(scenario)
     load = 1000.0
     # no supports: the series support stiffness goes with the fastener
-    track = vt.assemble_track(scenario)._replace(fastener_k=0.0, fastener_c=0.0, support_k=0.0)
-    vehicle = vt.assemble_vehicle(scenario)
-    wheels = vt.assemble_wheels(scenario, n_steps * dt, prescribed_load_N=[load, 0.0])
-    state = vt.static_equilibrium(scenario, track, vehicle, wheels)
+    track = assembly.assemble_track(scenario)._replace(
+        fastener_k=0.0, fastener_c=0.0, support_k=0.0
+    )
+    vehicle = assembly.assemble_vehicle(scenario)
+    wheels = assembly.assemble_wheels(scenario, n_steps * dt, prescribed_load_N=[load, 0.0])
+    state = assembly.static_equilibrium(scenario, track, vehicle, wheels)
     run = vt.integrate(track, vehicle, wheels, state, n_steps, dt)
     assert run.diverged is None
 
@@ -448,7 +457,7 @@ def test_loss_of_contact_is_reported_where_and_when(monkeypatch):
     scenario = Scenario.preset("single_bogie")
     centre = 0.5 * scenario.rail_length + 3.0  # rail coordinate; profile x is from the block
     monkeypatch.setattr(
-        model.irregularity,
+        model.track.irregularity,
         "profile_for",
         lambda irregularity, x: np.where(np.abs(x - 3.0) < 0.25, 1e-3, 0.0),
     )
@@ -538,7 +547,7 @@ def test_runs_at_the_estimated_limit_stay_stable_across_the_parameter_ranges():
 def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
     """Function Δt → spectral radius of the Zhai amplification matrix of the linearised model
     (dense, written out from the equations of docs/model.md §1–3; state x_n, v_n, a_{n−1})."""
-    track, vehicle = vt.assemble_track(scenario), vt.assemble_vehicle(scenario)
+    track, vehicle = assembly.assemble_track(scenario), assembly.assemble_vehicle(scenario)
     n_modes, n_blocks = track.omega2.size, track.n_spacings - 1
     n_dof = vehicle.inv_mass.shape[1]
     size = n_modes + n_blocks + n_dof
@@ -559,7 +568,7 @@ def zhai_spectral_radius_of_linearised_system(scenario: Scenario):
     mass[car] = 1.0 / vehicle.inv_mass[0]
     load = scenario.vehicle.static_wheel_load
     k_hertz = 1.5 * load ** (1 / 3) / scenario.track.hertz_constant
-    shapes = track.mode_shapes(vt.wheel_start_positions(scenario))
+    shapes = track.mode_shapes(assembly.wheel_start_positions(scenario))
     for j, dof in enumerate(vehicle.wheel_dof[0]):
         a = np.zeros(size)
         a[n_modes + n_blocks + dof] = 1.0

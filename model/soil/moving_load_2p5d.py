@@ -1,7 +1,7 @@
 """Cylindrical-shell tunnel in an elastic full-space, 2.5D moving-load model (docs/model.md §9).
 
 Cylindrical coordinates (r, θ, x): x along the tunnel, θ = 0 at the invert pointing **down**,
-(r, θ, x) right-handed as (r, θ, z) of ``model.tunnel_soil``; every field varies as
+(r, θ, x) right-handed as (r, θ, z) of ``model.soil.section_2d``; every field varies as
 exp(i(ωt − ξx)) and, per ring harmonic n, as cos nθ (u_r, u_x, σ_rr, σ_θθ, σ_xx, σ_rx) or
 sin nθ (u_θ, σ_rθ, σ_θx). Outward notation as in the 2D model: w = u_r(a), v = u_θ(a), u = u_x(a).
 The axial quantities are written u_x = i Ũ, σ_rx = i S̃_rx, σ_θx = i S̃_θx so that every
@@ -46,33 +46,32 @@ enter (sin 0θ = 0) and the system is the 2×2 of the radial and axial rows.
 
 At ξ = 0 every ξ-coupling entry is exactly zero: the axial row and the Z column separate from
 the 2×2 in-plane system of the 2D model, the unforced Z is 0 and H(ω, 0, d) is
-``model.tunnel_soil.invert_receptance`` to rounding. The Bessel functions, their ratio
-recurrence and the load coefficients are those of ``model.tunnel_soil`` (imported).
+``model.soil.section_2d.invert_receptance`` to rounding. The Bessel functions and their
+ratio recurrence are those of ``model.soil.bessel``, the checked inputs and the load
+coefficients those of ``model.soil.inputs``; the point load, the wavenumber integral of H, is
+in ``model.soil.point_load``.
 
 Zero frequency is refused: at ω = 0 the P and SH fields coincide (α = β = |ξ|) and the
 potentials no longer span the static solution. Along ξ = ω/v the moving-frame receptance grows
-like ln(1/ω) as ω → 0, as the 2D one does (``model.settlement`` averages the DC bin).
+like ln(1/ω) as ω → 0, as the 2D one does (``model.soil.response`` averages the DC bin).
 """
 
 from __future__ import annotations
 
 import cmath
-import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from model.params import Numerics
-from model.tunnel_soil import (
-    _as_1d,
-    _bessel_ratios,
-    _check_harmonics,
-    _reciprocal,
-    _ring_constants,
-    _soil_constants,
-    bessel_k01_scaled,
+from model.soil.bessel import bessel_ratios, log_derivative, next_ratio, radial_start
+from model.soil.inputs import (
+    as_1d,
+    check_harmonics,
+    checked_depths,
     invert_load_coefficients,
+    ring_constants,
+    soil_constants,
 )
 
 
@@ -269,15 +268,11 @@ def shell_soil_field_kernel(
         omega2_rho = w * w * density
         k1sq = w * w * slowness2_p
         k2sq = w * w * slowness2_s
-        k0p_a = _bessel_ratios(alpha * a, n_max, ratio_p_a)
-        k0s_a = _bessel_ratios(beta * a, n_max, ratio_s_a)
+        k0p_a = bessel_ratios(alpha * a, n_max, ratio_p_a)
+        k0s_a = bessel_ratios(beta * a, n_max, ratio_s_a)
         for n in range(n_max + 1):
-            if n == 0:
-                delta_p = alpha * ratio_p_a[0]
-                delta_s = beta * ratio_s_a[0]
-            else:
-                delta_p = alpha * _reciprocal(ratio_p_a[n - 1])
-                delta_s = beta * _reciprocal(ratio_s_a[n - 1])
+            delta_p = log_derivative(alpha, ratio_p_a, n)
+            delta_s = log_derivative(beta, ratio_s_a, n)
             x, y, z = _interface_amplitudes(
                 n, q, w, a, ring_mass, ring_extensional, ring_bending, ring_poisson,
                 alpha, beta, delta_p, delta_s, shear, lame, density,
@@ -290,22 +285,11 @@ def shell_soil_field_kernel(
         inv_ratio_s_a = 1.0 / ratio_s_a
         for j in range(n_points):
             r = radius[j]
-            zp = alpha * r
-            zs = beta * r
-            k0p, k1p = bessel_k01_scaled(zp)
-            k0s, k1s = bessel_k01_scaled(zs)
-            if r == a:  # e_P = e_S = 1 exactly, so the differences e_P − e_S vanish
-                e_p = 1.0 + 0j
-                e_s = 1.0 + 0j
-            else:
-                e_p = k0p / k0p_a * cmath.exp(-alpha * (r - a))
-                e_s = k0s / k0s_a * cmath.exp(-beta * (r - a))
-            ratio_p = k1p / k0p
-            ratio_s = k1s / k0s
+            # at r = a, e_P = e_S = 1 exactly, so the differences e_P − e_S vanish
+            e_p, ratio_p, two_over_zp = radial_start(alpha, r, a, k0p_a)
+            e_s, ratio_s, two_over_zs = radial_start(beta, r, a, k0s_a)
             delta_p = alpha * ratio_p
             delta_s = beta * ratio_s
-            two_over_zp = 2.0 / zp
-            two_over_zs = 2.0 / zs
             inv_r = 1.0 / r
             # Sums over n from which the stresses follow after the loop: the coefficients of
             # _field_vectors are linear in c_P + c_sum, in the T terms (2μ* T/r in S_rr, minus
@@ -343,12 +327,10 @@ def shell_soil_field_kernel(
                 if r != a:
                     e_p *= ratio_p * inv_ratio_p_a[n]
                     e_s *= ratio_s * inv_ratio_s_a[n]
-                recip_p = _reciprocal(ratio_p)
-                recip_s = _reciprocal(ratio_s)
+                recip_p, ratio_p = next_ratio(ratio_p, n, two_over_zp)
+                recip_s, ratio_s = next_ratio(ratio_s, n, two_over_zs)
                 delta_p = alpha * recip_p
                 delta_s = beta * recip_s
-                ratio_p = recip_p + (n + 1) * two_over_zp
-                ratio_s = recip_s + (n + 1) * two_over_zs
             u_r[i, j] = sum_ur
             if with_stresses:  # _field_vectors' coefficients applied to the sums
                 two_mu = 2.0 * shear
@@ -388,10 +370,10 @@ class StressField:
     sigma_thetax: np.ndarray
 
 
-def _paired_inputs(freq_hz, wavenumber_rad_per_m) -> tuple[np.ndarray, np.ndarray]:
+def paired_inputs(freq_hz, wavenumber_rad_per_m) -> tuple[np.ndarray, np.ndarray]:
     """(ω, ξ) as paired 1-D arrays (a scalar pairs with every entry of the other), ω > 0."""
-    freq = _as_1d(freq_hz, "freq_hz", "Hz")
-    xi = _as_1d(wavenumber_rad_per_m, "wavenumber_rad_per_m", "rad/m")
+    freq = as_1d(freq_hz, "freq_hz", "Hz")
+    xi = as_1d(wavenumber_rad_per_m, "wavenumber_rad_per_m", "rad/m")
     if freq.size != xi.size and 1 not in (freq.size, xi.size):
         raise ValueError(
             f"freq_hz ({freq.size} values) and wavenumber_rad_per_m ({xi.size} values) must be "
@@ -407,23 +389,11 @@ def _paired_inputs(freq_hz, wavenumber_rad_per_m) -> tuple[np.ndarray, np.ndarra
     return np.ascontiguousarray(2.0 * np.pi * freq), np.ascontiguousarray(xi)
 
 
-def _depths(depth_m) -> np.ndarray:
-    """Depths d ≥ 0 below the ring–soil interface (m)."""
-    depth = _as_1d(depth_m, "depth_m", "m")
-    if np.any(depth < 0.0):
-        bad = float(depth[depth < 0.0][0])
-        raise ValueError(
-            f"depth_m = {bad!r} is inside the lining: depths are measured from "
-            f"the ring–soil interface and must be ≥ 0 m"
-        )
-    return depth
-
-
 def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses):
     """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
-    a, mass, extensional, bending = _ring_constants(tunnel)
-    shear, lame, density = _soil_constants(soil)
-    coefficients = invert_load_coefficients(a, _check_harmonics(n_harmonics))
+    a, mass, extensional, bending = ring_constants(tunnel)
+    shear, lame, density = soil_constants(soil)
+    coefficients = invert_load_coefficients(a, check_harmonics(n_harmonics))
     try:
         fields = shell_soil_field_kernel(
             omega,
@@ -462,7 +432,7 @@ def receptance_2p5d(
 
     H(ω, ξ, d) of docs/model.md §9: the point is r = a + d, θ = 0, x = 0; the load a line load
     (N/m) at the invert varying as exp(i(ωt − ξx)); harmonics n = 0..N summed. H is even in ξ
-    and H(ω, 0, d) is ``model.tunnel_soil.invert_receptance``.
+    and H(ω, 0, d) is ``model.soil.section_2d.invert_receptance``.
 
     Parameters
     ----------
@@ -485,8 +455,8 @@ def receptance_2p5d(
     ndarray
         Complex (n, n_depth) receptance in m per N/m, exp(+iωt).
     """
-    omega, xi = _paired_inputs(freq_hz, wavenumber_rad_per_m)
-    depth = _depths(depth_m)
+    omega, xi = paired_inputs(freq_hz, wavenumber_rad_per_m)
+    depth = checked_depths(depth_m)
     return _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=False)[0]
 
 
@@ -495,7 +465,7 @@ def invert_stress_2p5d(
 ) -> StressField:
     """All six soil stresses below the invert per unit downward line load exp(i(ωt − ξx)).
 
-    At ξ = 0, σ_rr, σ_θθ, σ_rθ are those of ``model.tunnel_soil.soil_field`` at θ = 0 and
+    At ξ = 0, σ_rr, σ_θθ, σ_rθ are those of ``model.soil.section_2d.soil_field`` at θ = 0 and
     σ_xx = λ*(ε_rr + ε_θθ) (plane strain).
 
     Parameters
@@ -544,8 +514,8 @@ def invert_response_2p5d(
     (ndarray, StressField)
         Complex (n, n_depth) receptance in m per N/m and stresses in Pa per N/m.
     """
-    omega, xi = _paired_inputs(freq_hz, wavenumber_rad_per_m)
-    depth = _depths(depth_m)
+    omega, xi = paired_inputs(freq_hz, wavenumber_rad_per_m)
+    depth = checked_depths(depth_m)
     u_r, s_rr, s_tt, s_xx, s_rx = _run_kernel(
         omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True
     )
@@ -558,152 +528,3 @@ def invert_response_2p5d(
         sigma_rx=1j * s_rx,
         sigma_thetax=zero.copy(),
     )
-
-
-# ---- wavenumber integral: point load ------------------------------------------------------------
-# Points of each refinement at the P and S wavenumbers, per base-grid point; relative half-width
-# of the refined window around Re k, and the least relative width resolved there (undamped soil).
-_REFINE_FRACTION = 1 / 16
-_REFINE_HALF_WIDTH = 0.5
-_REFINE_MIN_WIDTH = 1e-3
-
-
-def _wavenumber_grid(omega, corner, reach, soil, numerics) -> np.ndarray:
-    """Nodes on [0, ξ_max] (rad/m): uniform in asinh(ξ/ξ_c); uniform on [0, 1.5 Re k₂], where
-    H oscillates in ξ with period ~2π/reach (waves to depth), with n_wavenumbers/(64π) nodes
-    per rad/m per metre of reach (12 per period of 2π/reach at the default 384); refined around
-    Re k₁ and Re k₂."""
-    xi_max = numerics.max_wavenumber
-    base = corner * np.sinh(np.linspace(0.0, math.asinh(xi_max / corner), numerics.n_wavenumbers))
-    shear, lame, density = _soil_constants(soil)
-    band = 1.5 * (omega * cmath.sqrt(density / shear)).real
-    n_band = math.ceil(band * reach * numerics.n_wavenumbers / (64.0 * math.pi))
-    parts = [base, np.linspace(0.0, band, n_band + 1)]
-    n_refine = max(8, int(_REFINE_FRACTION * numerics.n_wavenumbers))
-    for modulus in (lame + 2.0 * shear, shear):
-        k = omega * cmath.sqrt(density / modulus)
-        width = max(abs(k.imag) / abs(k.real), _REFINE_MIN_WIDTH)
-        offset = width * np.sinh(np.linspace(0.0, math.asinh(_REFINE_HALF_WIDTH / width), n_refine))
-        # Re k itself is left out: for an undamped soil it is the branch point α or β = 0.
-        parts.append(k.real * (1.0 + np.concatenate([-offset[:0:-1], offset[1:]])))
-    nodes = np.unique(np.concatenate(parts))
-    return nodes[(nodes >= 0.0) & (nodes <= xi_max)]
-
-
-@numba.njit(cache=True, nogil=True)
-def filon_cosine_kernel(nodes, values, x):
-    """∫ h(ξ) cos(ξx) dξ over [nodes[0], nodes[-1]] for h linear between the nodes.
-
-    Filon's rule: on a panel of half-width c about ξ_m, with h = h̄ + s(ξ − ξ_m) and θ = c x,
-    ∫ h cos ξx dξ = 2c h̄ sinc θ cos ξ_m x − 2c² s g(θ) sin ξ_m x, g(θ) = (sin θ − θ cos θ)/θ²
-    (series below |θ| = 1e-3, where the closed forms cancel). values (n_nodes, n_cols) complex,
-    x (n_x,); returns (n_x, n_cols).
-    """
-    n_cols = values.shape[1]
-    out = np.zeros((x.size, n_cols), np.complex128)
-    for i in range(x.size):
-        for p in range(nodes.size - 1):
-            half = 0.5 * (nodes[p + 1] - nodes[p])
-            theta = half * x[i]
-            if abs(theta) < 1e-3:
-                sinc = 1.0 - theta * theta / 6.0
-                g = theta / 3.0 - theta**3 / 30.0
-            else:
-                sinc = math.sin(theta) / theta
-                g = (sinc - math.cos(theta)) / theta
-            middle_phase = 0.5 * (nodes[p + 1] + nodes[p]) * x[i]
-            even = half * sinc * math.cos(middle_phase)
-            odd = half * g * math.sin(middle_phase)
-            left = even + odd
-            right = even - odd
-            for c in range(n_cols):
-                out[i, c] += left * values[p, c] + right * values[p + 1, c]
-    return out
-
-
-def point_load_response(
-    freq_hz, x_m, depth_m, tunnel, soil, n_harmonics: int, numerics: Numerics | None = None
-) -> np.ndarray:
-    """Displacement below the invert per unit downward point force on the invert (m/N).
-
-    G(ω, x, d) = (1/2π)∫ H(ω, ξ, d) e^{−iξx} dξ = (1/π)∫₀^∞ H(ω, ξ, d) cos ξx dξ (H is even),
-    docs/model.md §9: the force acts at the invert at x = 0, the displacement is taken at depth d
-    below the invert at distance x along the tunnel. The integral is Filon's rule (H linear
-    between nodes, the cosine integrated exactly, so x needs no extra nodes) on nodes uniform
-    in asinh(ξ/ξ_c) from 0 to ``numerics.max_wavenumber`` (ξ_c = min(0.1 Re k₂,
-    0.1/(a + d_max)), the scale of the smallest feature), uniform nodes over the band of
-    propagating waves ξ < 1.5 Re k₂ (where H oscillates with depth) and refinements around the
-    P and S wavenumbers Re k₁, Re k₂ where H has branch points. Its error is estimated as a third of
-    the change when every other node is dropped (Filon-linear converges as Δξ²); the tail
-    beyond ξ_max as |H(ξ_max)| ξ_max/(3π) (the shell's ξ⁻⁴ decay).
-
-    Parameters
-    ----------
-    freq_hz : float or array_like
-        Frequencies f (Hz), > 0.
-    x_m : float or array_like
-        Distances along the tunnel from the force (m).
-    depth_m : float or array_like
-        Depths d ≥ 0 below the ring–soil interface (m).
-    tunnel, soil : model.params.Tunnel, model.params.Soil
-        Lining and soil.
-    n_harmonics : int
-        Highest circumferential harmonic N ≥ 0.
-    numerics : model.params.Numerics, optional
-        Uses n_wavenumbers, max_wavenumber, wavenumber_tolerance (defaults if omitted).
-
-    Returns
-    -------
-    ndarray
-        Complex (n_freq, n_x, n_depth) displacement in m per N, exp(+iωt).
-
-    Raises
-    ------
-    ValueError
-        Bad input, or an integral whose estimated error (or tail) exceeds
-        ``numerics.wavenumber_tolerance`` times the largest |G| at that frequency and depth;
-        the message names the numerics parameter to raise.
-    """
-    numerics = Numerics() if numerics is None else numerics
-    omega, _ = _paired_inputs(freq_hz, 0.0)
-    x = _as_1d(x_m, "x_m", "m")
-    depth = _depths(depth_m)
-    shear, _, density = _soil_constants(soil)
-    reach = tunnel.ring_radius + float(depth.max())
-    grids = []
-    for w in omega:
-        k2 = w * math.sqrt(density / abs(shear))
-        corner = min(0.1 * k2, 0.1 / reach)
-        grids.append(_wavenumber_grid(w, corner, reach, soil, numerics))
-    sizes = [grid.size for grid in grids]
-    h_all = receptance_2p5d(
-        np.repeat(omega / (2.0 * np.pi), sizes), np.concatenate(grids), depth, tunnel, soil,
-        n_harmonics,
-    )  # fmt: skip
-    tolerance = numerics.wavenumber_tolerance
-    response = np.empty((omega.size, x.size, depth.size), dtype=complex)
-    start = 0
-    for i, nodes in enumerate(grids):
-        h = h_all[start : start + nodes.size]
-        start += nodes.size
-        response[i] = filon_cosine_kernel(nodes, h, x) / np.pi
-        coarse = filon_cosine_kernel(nodes[::2], np.ascontiguousarray(h[::2]), x) / np.pi
-        if (nodes.size - 1) % 2:  # the coarse rule must reach ξ_max too
-            coarse += filon_cosine_kernel(nodes[-2:], np.ascontiguousarray(h[-2:]), x) / np.pi
-        scale = np.abs(response[i]).max(axis=0)
-        error = np.abs(response[i] - coarse).max(axis=0) / 3.0
-        tail = np.abs(h[-1]) * nodes[-1] / (3.0 * np.pi)
-        freq = omega[i] / (2.0 * np.pi)
-        if np.any(error > tolerance * scale):
-            raise ValueError(
-                f"the wavenumber integral has not converged at {freq:.4g} Hz (estimated "
-                f"relative error {np.max(error / scale):.2g} > numerics.wavenumber_tolerance = "
-                f"{tolerance:g}): raise numerics.n_wavenumbers (now {numerics.n_wavenumbers})"
-            )
-        if np.any(tail > tolerance * scale):
-            raise ValueError(
-                f"the wavenumber integral is cut too early at {freq:.4g} Hz (estimated tail "
-                f"{np.max(tail / scale):.2g} > numerics.wavenumber_tolerance = {tolerance:g}): "
-                f"raise numerics.max_wavenumber (now {numerics.max_wavenumber:g} rad/m)"
-            )
-    return response

@@ -1,4 +1,4 @@
-"""Shell in an elastic full-space, 2.5D (model.tunnel_soil_3d): the ξ = 0 slice against the 2D
+"""Shell in a full-space, 2.5D (model.soil.moving_load_2p5d): the ξ = 0 slice against the 2D
 model, symmetry, passivity, the shell's beam and rod limits, an independent finite-element
 model of the same problem, the wavenumber integral (Kelvin limit, convergence), the moving-frame
 pipeline against the direct sum over block forces, and input errors."""
@@ -11,9 +11,11 @@ import scipy.sparse.linalg
 
 from model import pipeline
 from model.params import Numerics, Scenario, Soil, Tunnel
-from model.settlement import section_receptance
-from model.tunnel_soil import invert_load_coefficients, invert_receptance, soil_field
-from model.tunnel_soil_3d import invert_stress_2p5d, point_load_response, receptance_2p5d
+from model.soil.inputs import invert_load_coefficients
+from model.soil.moving_load_2p5d import invert_stress_2p5d, receptance_2p5d
+from model.soil.point_load import point_load_response
+from model.soil.response import section_receptance
+from model.soil.section_2d import invert_receptance, soil_field
 
 SOILS = {
     "paper": Soil(),
@@ -124,7 +126,7 @@ class IdealisedSoil(Soil):
     """A Soil that may leave the physical bounds, for the closed-form limits of the lining.
 
     The vanishing soil is a limit of the model, not a ground: the subclass widens the declared
-    bounds of model.params on purpose (model.tunnel_soil checks an object against the bounds its
+    bounds of model.params on purpose (model.soil.section_2d checks an object against the bounds its
     own class declares).
     """
 
@@ -409,7 +411,7 @@ def test_an_unconverged_wavenumber_integral_names_the_parameter_to_raise():
 def test_moving_frame_receptance_grows_like_log_one_over_frequency():
     """Along ξ = ω/v, H(f, f/v, d) = A′ + B ln f + O(f) as f → 0 (the DC bin of the record is
     infinite, ∫u dt = (1/v)∫G dx with G ~ 1/|x|), which is the form the band average
-    Re H(h/e) of model.settlement is exact for: the slope per decade is constant to 1e-3
+    Re H(h/e) of model.soil.response is exact for: the slope per decade is constant to 1e-3
     between 1e-4 and 1e-2 Hz (its change is O(f) there, observed 3e-4) and equal at every depth
     to 1 % (B is the slope of the logarithmic far field, the same everywhere)."""
     scenario = Scenario.paper()

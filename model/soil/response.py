@@ -1,9 +1,9 @@
 """Displacement time histories below the tunnel and their peaks against depth (docs/model.md §8).
 
 The line load q(t) on the invert is Fourier transformed, multiplied by the invert receptance
-H(f, d) of ``model.tunnel_soil`` and transformed back, at every output depth d. With the 2.5D
+H(f, d) of ``model.soil.section_2d`` and transformed back, at every output depth d. With the 2.5D
 model (``tunnel.model == "2.5d"``, docs/model.md §9) the receptance is that of
-``model.tunnel_soil_3d`` at the wavenumber ξ = ω/v of the train moving at speed v: the invert
+``model.soil.moving_load_2p5d`` at the wavenumber ξ = ω/v of the train moving at speed v: the invert
 load is stationary in the moving frame, so U(ω, d) = H(ω, ω/v, d) Q(ω).
 
 Record handling:
@@ -51,9 +51,9 @@ import numpy as np
 import scipy.fft
 import scipy.sparse
 
+from model.soil.moving_load_2p5d import receptance_2p5d
+from model.soil.section_2d import invert_receptance
 from model.spectra import checked_record, fourier_transform, one_sided_psd
-from model.tunnel_soil import invert_receptance
-from model.tunnel_soil_3d import receptance_2p5d
 
 # Output samples per period of the highest retained frequency (see the module docstring).
 SAMPLES_PER_MAX_FREQUENCY_PERIOD = 4

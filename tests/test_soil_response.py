@@ -1,19 +1,19 @@
-"""Soil stage (model.settlement): the FFT chain against direct Fourier integration, convergence
+"""Soil stage (model.soil.response): the FFT chain against direct Fourier integration, convergence
 in zero padding and harmonics, the zero-frequency bin, decimation, outputs and errors."""
 
 import numpy as np
 import pytest
 
 from model.params import Numerics, Scenario, Soil, Tunnel
-from model.settlement import (
+from model.soil.response import (
     dc_band_receptance,
     decimation_factor,
     kernel_interpolation_matrix,
     kernel_sample_bins,
     soil_response,
 )
+from model.soil.section_2d import invert_receptance
 from model.spectra import fourier_transform, one_sided_psd
-from model.tunnel_soil import invert_receptance
 
 GAUSS_X, GAUSS_W = np.polynomial.legendre.leggauss(8)
 

@@ -1,4 +1,4 @@
-"""Ring in an elastic full-space (model.tunnel_soil): closed forms, field equations, an
+"""Ring in an elastic full-space (model.soil.section_2d): closed forms, field equations, an
 independent finite-element model, passivity, convergence and input errors."""
 
 from types import SimpleNamespace
@@ -11,10 +11,10 @@ import scipy.sparse.linalg
 from scipy.special import kv, kve
 
 from model.params import Scenario, Soil, Tunnel
-from model.tunnel_soil import (
-    bessel_k01_scaled,
+from model.soil.bessel import bessel_k01_scaled
+from model.soil.inputs import invert_load_coefficients
+from model.soil.section_2d import (
     harmonic_field,
-    invert_load_coefficients,
     invert_receptance,
     ring_displacement,
     ring_displacement_harmonics,
@@ -33,7 +33,7 @@ class IdealisedTunnel(Tunnel):
     """A Tunnel whose ring may leave the physical bounds, for closed-form limits only.
 
     The empty cavity and the vanishing radius are limits of the model, not linings: the
-    subclass widens the declared bounds of model.params on purpose, and model.tunnel_soil
+    subclass widens the declared bounds of model.params on purpose, and model.soil.section_2d
     checks an object against the bounds its own class declares.
     """
 

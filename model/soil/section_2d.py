@@ -33,144 +33,40 @@ paper soil).
 A downward line load F′ (N/m) at the invert is an outward radial load there, with Fourier
 coefficients F′/(2πa) (n = 0) and F′/(πa) (n ≥ 1) per unit arc length.
 
-Bessel functions: only K₀, K₁ are evaluated (exponentially scaled, power series / Steed's
-continued fraction / asymptotic series); higher orders follow from the forward recurrence of the
-ratio R_n = K_{n+1}/K_n = 1/R_{n−1} + 2n/z, which is stable for K, and all fields are formed from
-ratios K_n(z r)/K_n(z a), which neither overflow at low frequency nor underflow at depth.
+Bessel functions K_n, their ratio recurrence and the radial functions K_n(z r)/K_n(z a):
+``model.soil.bessel``.
 
 The 2D static response is infinite for n = 1 (it grows like ln 1/ω), so f = 0 is refused; see
-``model.settlement`` for the zero-frequency bin.
+``model.soil.response`` for the zero-frequency bin.
 """
 
 from __future__ import annotations
 
 import cmath
-import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from model.params import Soil, Tunnel
-
-EULER_GAMMA = 0.5772156649015329
-
-# |z| below which K₀, K₁ come from their power series (no cancellation there: the series terms
-# stay below ~e^|z| ≈ 7 times the result), and above which from the asymptotic series (whose
-# smallest term, ~e^(−2|z|), is below 1e-17 there). Steed's continued fraction covers between.
-_SERIES_MAX_ABS_Z = 2.0
-_ASYMPTOTIC_MIN_ABS_Z = 20.0
-# Relative size (squared) of the last term kept in every series / continued fraction.
-_TERM_TOLERANCE_SQ = 1e-34
-
-
-# ---- Bessel functions K₀, K₁ of complex argument, exponentially scaled ------------------------
-@numba.njit(cache=True)
-def _abs2(z):
-    """Squared modulus of a complex number."""
-    return z.real * z.real + z.imag * z.imag
-
-
-@numba.njit(cache=True)
-def _k01_series(z):
-    """(K₀(z) eᶻ, K₁(z) eᶻ) from the ascending series (DLMF 10.31.1–2), for |z| ≤ 2."""
-    quarter_z2 = 0.25 * z * z
-    log_half_z = cmath.log(0.5 * z)
-    term0 = 1.0 + 0j  # (z²/4)^k / (k!)²
-    term1 = 1.0 + 0j  # (z²/4)^k / (k! (k+1)!)
-    i0 = term0
-    sum0 = 0j
-    i1_over_half_z = term1
-    sum1 = (1.0 - 2.0 * EULER_GAMMA) * term1  # ψ(1) + ψ(2)
-    harmonic = 0.0
-    for k in range(1, 60):
-        term0 = term0 * quarter_z2 * (1.0 / (k * k))
-        term1 = term1 * quarter_z2 * (1.0 / (k * (k + 1)))
-        harmonic += 1.0 / k
-        i0 += term0
-        sum0 += harmonic * term0
-        i1_over_half_z += term1
-        sum1 += (2.0 * harmonic + 1.0 / (k + 1) - 2.0 * EULER_GAMMA) * term1
-        if _abs2(term0) < _TERM_TOLERANCE_SQ * _abs2(i0):
-            break
-    k0 = -(log_half_z + EULER_GAMMA) * i0 + sum0
-    k1 = 1.0 / z + log_half_z * (0.5 * z * i1_over_half_z) - 0.25 * z * sum1
-    scale = cmath.exp(z)
-    return k0 * scale, k1 * scale
-
-
-@numba.njit(cache=True)
-def _k01_continued_fraction(z):
-    """(K₀(z) eᶻ, K₁(z) eᶻ) by Steed's method for Temme's CF2, for 2 < |z| < 20, Re z ≥ 0."""
-    b = 2.0 * (1.0 + z)
-    d = 1.0 / b
-    h = d
-    delh = d
-    q1 = 0j
-    q2 = 1.0 + 0j
-    a1 = 0.25
-    q = a1 + 0j
-    c = a1 + 0j
-    a = -a1
-    s = 1.0 + q * delh
-    for i in range(2, 2000):
-        a -= 2.0 * (i - 1)
-        c = c * (-a / i)
-        q_new = (q1 - b * q2) * (1.0 / a)
-        q1 = q2
-        q2 = q_new
-        q += c * q_new
-        b += 2.0
-        d = _reciprocal(b + a * d)
-        delh = (b * d - 1.0) * delh
-        h += delh
-        ds = q * delh
-        s += ds
-        if _abs2(ds) < _TERM_TOLERANCE_SQ * _abs2(s):
-            break
-    k0 = cmath.sqrt(math.pi / (2.0 * z)) / s
-    return k0, k0 * (z + 0.5 - a1 * h) / z
-
-
-@numba.njit(cache=True)
-def _k01_asymptotic(z):
-    """(K₀(z) eᶻ, K₁(z) eᶻ) from Hankel's asymptotic series (DLMF 10.40.2), for |z| ≥ 20."""
-    inv_z = 1.0 / z
-    term0 = 1.0 + 0j
-    term1 = 1.0 + 0j
-    sum0 = term0
-    sum1 = term1
-    for k in range(1, 80):
-        odd_sq = (2.0 * k - 1.0) ** 2
-        term0 = term0 * inv_z * (-odd_sq / (8.0 * k))
-        term1 = term1 * inv_z * ((4.0 - odd_sq) / (8.0 * k))
-        sum0 += term0
-        sum1 += term1
-        if _abs2(term0) + _abs2(term1) < _TERM_TOLERANCE_SQ:
-            break
-    prefactor = cmath.sqrt(0.5 * math.pi * inv_z)
-    return prefactor * sum0, prefactor * sum1
-
-
-@numba.njit(cache=True)
-def bessel_k01_scaled(z):
-    """(K₀(z) eᶻ, K₁(z) eᶻ) for complex z ≠ 0 with Re z ≥ 0; relative error ≲ 1e-14."""
-    abs2 = _abs2(z)
-    if abs2 <= _SERIES_MAX_ABS_Z**2:
-        return _k01_series(z)
-    if abs2 >= _ASYMPTOTIC_MIN_ABS_Z**2:
-        return _k01_asymptotic(z)
-    return _k01_continued_fraction(z)
+from model.soil.bessel import (
+    bessel_ratios,
+    log_derivative,
+    next_ratio,
+    radial_start,
+)
+from model.soil.inputs import (
+    RING_INPUTS,
+    SOIL_INPUTS,
+    as_1d,
+    check_harmonics,
+    checked_depths,
+    invert_load_coefficients,
+    ring_constants,
+    soil_constants,
+)
 
 
 # ---- ring–soil solution per harmonic ----------------------------------------------------------
-@numba.njit(cache=True)
-def _reciprocal(z):
-    """1/z, cheaper than a general complex division."""
-    scale = 1.0 / _abs2(z)
-    return complex(z.real * scale, -z.imag * scale)
-
-
 @numba.njit(cache=True)
 def _displacement_terms(n, r, delta_p, delta_s):
     """U, V coefficients of the P solution and of the P + SV sum of harmonic n at r.
@@ -225,18 +121,6 @@ def _stress_difference_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
     return diff_p, diff_sum
 
 
-@numba.njit(cache=True)
-def _bessel_ratios(z, n_max, out):
-    """out[m] = K_{m+1}(z)/K_m(z), m = 0..n_max (forward recurrence); returns K₀(z) eᶻ."""
-    k0, k1 = bessel_k01_scaled(z)
-    ratio = k1 / k0
-    two_over_z = 2.0 / z
-    for m in range(n_max + 1):
-        out[m] = ratio
-        ratio = _reciprocal(ratio) + (m + 1) * two_over_z
-    return k0
-
-
 @numba.njit(cache=True, parallel=True, nogil=True)
 def ring_soil_field_kernel(
     omega,
@@ -280,8 +164,8 @@ def ring_soil_field_kernel(
         beta = 1j * omega[i] * slowness_s
         ratio_p_a = np.empty(n_max + 1, np.complex128)
         ratio_s_a = np.empty(n_max + 1, np.complex128)
-        k0p_a = _bessel_ratios(alpha * a, n_max, ratio_p_a)
-        k0s_a = _bessel_ratios(beta * a, n_max, ratio_s_a)
+        k0p_a = bessel_ratios(alpha * a, n_max, ratio_p_a)
+        k0s_a = bessel_ratios(beta * a, n_max, ratio_s_a)
         amp_p = np.empty(n_max + 1, np.complex128)  # amplitude X of the P solution
         amp_sum = np.empty(n_max + 1, np.complex128)  # amplitude Y of the P + SV sum
         inertia = -(omega[i] ** 2) * ring_mass
@@ -294,12 +178,8 @@ def ring_soil_field_kernel(
             z_tt = inertia + ring_extensional * n * n / a**2
             d_r = inertia + ring_extensional * (1.0 - n) / a**2 + bending
             d_t = -inertia + ring_extensional * n * (1.0 - n) / a**2
-            if n == 0:
-                delta_p = alpha * ratio_p_a[0]
-                delta_s = beta * ratio_s_a[0]
-            else:
-                delta_p = alpha * _reciprocal(ratio_p_a[n - 1])
-                delta_s = beta * _reciprocal(ratio_s_a[n - 1])
+            delta_p = log_derivative(alpha, ratio_p_a, n)
+            delta_s = log_derivative(beta, ratio_s_a, n)
             u_p, v_p, u_sum, v_sum = _displacement_terms(n, a, delta_p, delta_s)
             if n == 0:  # sin 0θ = 0: no SV potential, radial equation only
                 srr_p = _stress_terms(n, a, alpha, beta, delta_p, delta_s, shear, lame)[0]
@@ -323,24 +203,11 @@ def ring_soil_field_kernel(
         inv_ratio_s_a = 1.0 / ratio_s_a
         for j in range(n_points):
             r = radius[j]
-            zp = alpha * r
-            zs = beta * r
-            k0p, k1p = bessel_k01_scaled(zp)
-            k0s, k1s = bessel_k01_scaled(zs)
-            # e_P = K_n(αr)/K_n(αa), advanced in n with the ratio recurrence. At r = a it is 1
-            # exactly (a complex x/x can be off by an ulp, which Y (e_P − e_S) would amplify).
-            if r == a:
-                e_p = 1.0 + 0j
-                e_s = 1.0 + 0j
-            else:
-                e_p = k0p / k0p_a * cmath.exp(-alpha * (r - a))
-                e_s = k0s / k0s_a * cmath.exp(-beta * (r - a))
-            ratio_p = k1p / k0p  # R_n(αr) = K_{n+1}/K_n, advanced in n below
-            ratio_s = k1s / k0s
+            # e_P = K_n(αr)/K_n(αa) and R_n(αr) = K_{n+1}/K_n, advanced in n below (e_S alike)
+            e_p, ratio_p, two_over_zp = radial_start(alpha, r, a, k0p_a)
+            e_s, ratio_s, two_over_zs = radial_start(beta, r, a, k0s_a)
             delta_p = alpha * ratio_p  # δ_P = α R_0 for n = 0, α/R_{n−1} for n ≥ 1
             delta_s = beta * ratio_s
-            two_over_zp = 2.0 / zp
-            two_over_zs = 2.0 / zs
             inv_r = 1.0 / r
             # Sums over n of the cos-type terms: u_r; Σ cw (c_P + c_sum) and Σ cw (c_P T_P +
             # c_sum T_sum), from which σ_rr and σ_θθ follow after the loop
@@ -373,12 +240,10 @@ def ring_soil_field_kernel(
                 if r != a:  # at r = a, e_P = e_S = 1 exactly, and Y (e_P − e_S) must vanish
                     e_p *= ratio_p * inv_ratio_p_a[n]
                     e_s *= ratio_s * inv_ratio_s_a[n]
-                recip_p = _reciprocal(ratio_p)
-                recip_s = _reciprocal(ratio_s)
+                recip_p, ratio_p = next_ratio(ratio_p, n, two_over_zp)
+                recip_s, ratio_s = next_ratio(ratio_s, n, two_over_zs)
                 delta_p = alpha * recip_p
                 delta_s = beta * recip_s
-                ratio_p = recip_p + (n + 1) * two_over_zp
-                ratio_s = recip_s + (n + 1) * two_over_zs
             u_r[i, j] = sum_ur
             u_t[i, j] = sum_ut
             if with_stresses:
@@ -405,110 +270,22 @@ class SoilField:
     sigma_rtheta: np.ndarray
 
 
-def _checked_values(obj, section_class: type, names: tuple[str, ...]) -> None:
-    """Refuse values of ``obj`` outside the bounds that ``model.params`` declares for them.
-
-    The parameter classes are the only table of bounds: a Tunnel or Soil object was checked on
-    assignment against its own declared parameters (a subclass may widen them on purpose, e.g.
-    for an idealised limit in a test); any other object is checked against the declarations of
-    ``section_class``, with the same message.
-    """
-    if isinstance(obj, section_class):
-        return
-    for name in names:
-        section_class.param[name]._validate(getattr(obj, name))
-
-
-def _finite_constants(section: str, obj, names: tuple[str, ...], compute) -> tuple:
-    """Result of ``compute()``, refused (naming the inputs) if a constant is not finite."""
-    try:
-        constants = compute()
-    except ArithmeticError:
-        constants = (math.nan,)
-    if not all(cmath.isfinite(value) for value in constants):
-        values = ", ".join(f"{section}.{name} = {getattr(obj, name)!r}" for name in names)
-        raise ValueError(f"{values} give non-finite model constants; check these inputs")
-    return constants
-
-
-_RING_INPUTS = ("inner_radius", "thickness", "youngs_modulus", "poisson_ratio", "density")
-_SOIL_INPUTS = (
-    "youngs_modulus",
-    "poisson_ratio",
-    "density",
-    "shear_loss_factor",
-    "bulk_loss_factor",
-)
-
-
-def _ring_constants(tunnel) -> tuple[float, float, float, float]:
-    """(a, m, K, D) of the lining ring, after checking its parameters."""
-    _checked_values(tunnel, Tunnel, _RING_INPUTS)
-    return _finite_constants(
-        "tunnel",
-        tunnel,
-        _RING_INPUTS,
-        lambda: (
-            tunnel.ring_radius,
-            tunnel.density * tunnel.thickness,
-            tunnel.extensional_stiffness,
-            tunnel.bending_stiffness,
-        ),
-    )
-
-
-def _soil_constants(soil) -> tuple[complex, complex, float]:
-    """(μ*, λ*, ρ) of the hysteretically damped soil, after checking its parameters."""
-    _checked_values(soil, Soil, _SOIL_INPUTS)
-
-    def moduli():
-        shear = soil.shear_modulus * (1.0 + 1j * soil.shear_loss_factor)
-        bulk = soil.bulk_modulus * (1.0 + 1j * soil.bulk_loss_factor)
-        return shear, bulk - 2.0 * shear / 3.0, soil.density
-
-    return _finite_constants("soil", soil, _SOIL_INPUTS, moduli)
-
-
-def _as_1d(values, name: str, unit: str) -> np.ndarray:
-    """Float array of at most one dimension, refusing NaN and infinity."""
-    array = np.atleast_1d(np.asarray(values, dtype=float))
-    if array.ndim != 1:
-        raise ValueError(f"{name} must be a scalar or a 1-D array, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise ValueError(
-            f"{name} contains {float(array[~np.isfinite(array)][0])!r}; finite values "
-            f"in {unit} are required"
-        )
-    return array
-
-
 def _angular_frequency(freq_hz) -> np.ndarray:
     """ω = 2πf (rad/s) for frequencies that must all be > 0."""
-    freq = _as_1d(freq_hz, "freq_hz", "Hz")
+    freq = as_1d(freq_hz, "freq_hz", "Hz")
     if np.any(freq <= 0.0):
         bad = float(freq[freq <= 0.0][0])
         raise ValueError(
             f"freq_hz = {bad!r} is outside the allowed range (0, inf) Hz: the 2D static (f = 0) "
-            f"response is infinite; model.settlement treats the zero-frequency bin by averaging "
+            f"response is infinite; model.soil.response treats the zero-frequency bin by averaging "
             f"over its band"
         )
     return 2.0 * np.pi * freq
 
 
-def _check_harmonics(n_harmonics) -> int:
-    """n_harmonics as an int ≥ 0."""
-    if (
-        isinstance(n_harmonics, bool)
-        or not isinstance(n_harmonics, int | np.integer)
-        or (n_harmonics < 0)
-    ):
-        raise ValueError(f"n_harmonics = {n_harmonics!r} must be an integer ≥ 0")
-    return int(n_harmonics)
-
-
 def _check_radius(radius_m, ring_radius: float) -> np.ndarray:
     """Radii (m) that must lie in the soil, r ≥ a."""
-    radius = _as_1d(radius_m, "radius_m", "m")
+    radius = as_1d(radius_m, "radius_m", "m")
     if np.any(radius < ring_radius):
         bad = float(radius[radius < ring_radius][0])
         raise ValueError(
@@ -518,32 +295,10 @@ def _check_radius(radius_m, ring_radius: float) -> np.ndarray:
     return radius
 
 
-def invert_load_coefficients(ring_radius: float, n_harmonics: int) -> np.ndarray:
-    """Fourier coefficients of a unit downward line load at the invert (1/m).
-
-    q_r(θ) = δ(aθ) = Σ_n c_n cos nθ per unit arc length with c_0 = 1/(2πa), c_n = 1/(πa).
-
-    Parameters
-    ----------
-    ring_radius : float
-        Ring radius a (m).
-    n_harmonics : int
-        Highest harmonic N; coefficients for n = 0..N.
-
-    Returns
-    -------
-    ndarray
-        (N + 1,) coefficients in 1/m (radial traction in Pa per N/m of line load).
-    """
-    coefficients = np.full(_check_harmonics(n_harmonics) + 1, 1.0 / (np.pi * ring_radius))
-    coefficients[0] *= 0.5
-    return coefficients
-
-
 def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stresses):
     """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
-    a, mass, extensional, bending = _ring_constants(tunnel)
-    shear, lame, density = _soil_constants(soil)
+    a, mass, extensional, bending = ring_constants(tunnel)
+    shear, lame, density = soil_constants(soil)
     fields = ring_soil_field_kernel(
         omega,
         radius,
@@ -563,8 +318,8 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
         if np.any(bad):
             row = int(np.argwhere(bad)[0, 0])
             inputs = ", ".join(
-                [f"tunnel.{name} = {getattr(tunnel, name):g}" for name in _RING_INPUTS]
-                + [f"soil.{name} = {getattr(soil, name):g}" for name in _SOIL_INPUTS]
+                [f"tunnel.{name} = {getattr(tunnel, name):g}" for name in RING_INPUTS]
+                + [f"soil.{name} = {getattr(soil, name):g}" for name in SOIL_INPUTS]
             )
             raise ValueError(
                 f"the ring–soil solution is not finite at f = {omega[row] / (2 * np.pi):.4g} Hz "
@@ -599,13 +354,7 @@ def invert_receptance(freq_hz, depth_m, tunnel, soil, n_harmonics: int) -> np.nd
         imaginary part at d = 0 is ≤ 0 (the soil absorbs power).
     """
     omega = _angular_frequency(freq_hz)
-    depth = _as_1d(depth_m, "depth_m", "m")
-    if np.any(depth < 0.0):
-        bad = float(depth[depth < 0.0][0])
-        raise ValueError(
-            f"depth_m = {bad!r} is inside the lining: depths are measured from "
-            f"the ring–soil interface and must be ≥ 0 m"
-        )
+    depth = checked_depths(depth_m)
     coefficients = invert_load_coefficients(tunnel.ring_radius, n_harmonics)
     cos_weight = np.broadcast_to(coefficients, (depth.size, coefficients.size))
     sin_weight = np.zeros_like(cos_weight)
@@ -637,7 +386,7 @@ def soil_field(freq_hz, radius_m, theta_rad, tunnel, soil, n_harmonics: int) -> 
     """
     omega = _angular_frequency(freq_hz)
     radius, theta = np.broadcast_arrays(
-        _check_radius(radius_m, tunnel.ring_radius), _as_1d(theta_rad, "theta_rad", "rad")
+        _check_radius(radius_m, tunnel.ring_radius), as_1d(theta_rad, "theta_rad", "rad")
     )
     coefficients = invert_load_coefficients(tunnel.ring_radius, n_harmonics)
     n_theta = np.outer(theta, np.arange(coefficients.size))
@@ -678,7 +427,7 @@ def harmonic_field(freq_hz, radius_m, tunnel, soil, n: int) -> SoilField:
     """
     omega = _angular_frequency(freq_hz)
     radius = _check_radius(radius_m, tunnel.ring_radius)
-    weight = np.zeros((radius.size, _check_harmonics(n) + 1))
+    weight = np.zeros((radius.size, check_harmonics(n) + 1))
     weight[:, n] = 1.0
     return SoilField(*_run_kernel(omega, radius, weight, weight, tunnel, soil, with_stresses=True))
 
@@ -728,6 +477,6 @@ def ring_displacement(freq_hz, theta_rad, tunnel, soil, n_harmonics: int):
     (w, v) : ndarray, ndarray
         Complex (n_freq, n_theta) in m per N/m.
     """
-    theta = _as_1d(theta_rad, "theta_rad", "rad")
+    theta = as_1d(theta_rad, "theta_rad", "rad")
     field = soil_field(freq_hz, tunnel.ring_radius, theta, tunnel, soil, n_harmonics)
     return field.u_r, field.u_theta

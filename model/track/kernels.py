@@ -10,7 +10,7 @@ track and O(N_m · n_wheels) for the wheel–rail coupling, with no transform at
 Vehicle: per car a dense (d × d) stiffness and damping matrix, a diagonal mass, gravity, and the
 local indices of its wheelset DOFs. Displacements are positive downward.
 
-The kernels take the named records of :mod:`model.vehicle_track` (``TrackSystem``,
+The kernels take the named records of :mod:`model.track.assembly` (``TrackSystem``,
 ``VehicleSystem``, ``WheelInputs``, ``SystemState``, ``Scratch``, ``Outputs``, ``ContactLog``):
 typed named tuples, which Numba passes by value as structs of their fields. They only read the
 fields by name, so the records are defined with the assembly code and not imported here.

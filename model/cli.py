@@ -1,0 +1,237 @@
+"""Command line (``python -m model``): run a scenario and write its results as CSV and JSON.
+
+Examples::
+
+    python -m model --preset paper --out results --set train.speed_kmh=60
+    python -m model study --preset paper --vary train.speed_kmh=40:80:5 --seeds 20 --out study
+    python -m model fe --preset paper --law mohr_coulomb --passages 3 --out fe
+
+The first word picks a subcommand (``study``: parameter sweeps and Monte-Carlo bands on Dask,
+``fe``: the OpenSeesPy section check); without one, a single run is made.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from model.params import Scenario
+from model.pipeline import STAGES, Results, SimulationError, run
+from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
+from model.soil.response import COMPARISON_DEPTH_M
+
+PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
+
+
+def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--preset`` / ``--scenario`` and the repeatable ``--set`` (read by load_scenario)."""
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument(
+        "--preset",
+        default="paper",
+        choices=Scenario.preset_names(),
+        help="named scenario from model/data/presets.json (default: paper)",
+    )
+    source.add_argument("--scenario", type=Path, help="scenario JSON file written by a run")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="SECTION.PARAM=VALUE",
+        help="override one parameter, e.g. train.speed_kmh=60 (repeatable)",
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``python -m model``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m model",
+        description="Run the vehicle–track–tunnel–soil model and write its results.",
+    )
+    add_scenario_arguments(parser)
+    parser.add_argument(
+        "--out", type=Path, required=True, help="output folder (created; must be new or empty)"
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="write into --out even if it holds files"
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    return parser
+
+
+def load_scenario(args: argparse.Namespace) -> Scenario:
+    """Scenario from the preset or file, with the ``--set`` overrides applied."""
+    scenario = Scenario.from_file(args.scenario) if args.scenario else Scenario.preset(args.preset)
+    for item in args.overrides:
+        path, sep, value = item.partition("=")
+        if not sep:
+            raise ValueError(f"--set {item!r} must be of the form section.parameter=value")
+        scenario.set_value(path.strip(), value.strip())
+    return scenario
+
+
+class TerminalProgress:
+    """Text progress bar on stderr, shown once a run has lasted ``PROGRESS_AFTER_S``; ``stages``
+    are the stage names reported, in order (default: the pipeline's)."""
+
+    def __init__(self, stream=sys.stderr, width: int = 30, stages: tuple[str, ...] = STAGES):
+        self.stream, self.width, self.stages = stream, width, stages
+        self.start = time.perf_counter()
+        self.shown = False
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        if time.perf_counter() - self.start < PROGRESS_AFTER_S:
+            return
+        overall = (self.stages.index(stage) + fraction) / len(self.stages)
+        filled = round(overall * self.width)
+        bar = "#" * filled + "-" * (self.width - filled)
+        self.stream.write(f"\r[{bar}] {overall:4.0%} {stage:<14}")
+        self.stream.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        """End the bar's line."""
+        if self.shown:
+            self.stream.write("\n")
+
+
+def prepare_output_folder(out: Path, force: bool) -> None:
+    """Create ``out`` (and its parents) and check it can be written, before any computation.
+
+    Raises
+    ------
+    ValueError
+        If ``out`` is a file, holds files and ``force`` is false, or cannot be created or
+        written; the message names ``--out``.
+    """
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file, not a folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise ValueError(
+            f"--out {out} already holds files; choose a new folder or pass --force to overwrite"
+        )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as error:
+        raise ValueError(f"--out {out} cannot be written: {error.strerror or error}") from None
+
+
+def write_results(results: Results, out: Path) -> list[Path]:
+    """Write time histories, spectra, the depth profile, the long-term settlement against time and
+    per depth (CSV), scenario and summary (JSON)."""
+    out.mkdir(parents=True, exist_ok=True)
+    vt, load, soil, lt = results.vehicle_track, results.load, results.soil, results.longterm
+    tables = {
+        "time_histories.csv": {
+            "t_s": vt.t_s,
+            "block_force_N": vt.block_force_N,
+            "block_disp_m": vt.block_disp_m,
+            "rail_disp_m": vt.rail_disp_m,
+            "winkler_block_disp_m": vt.winkler_block_disp_m,
+            "line_load_N_per_m": load.line_load_N_per_m,
+        },
+        "wheel_forces.csv": {
+            "t_s": vt.t_s,
+            **{f"wheel_{i + 1}_N": force for i, force in enumerate(vt.wheel_force_N)},
+        },
+        "load_psd.csv": {"f_hz": load.f_hz, "psd_N2_per_m2_per_hz": load.psd},
+        "interface_psd.csv": {"f_hz": soil.f_hz, "psd_m2_per_hz": soil.interface_psd},
+        "depth_profile.csv": {"depth_m": soil.depth_m, "peak_disp_m": soil.peak_disp_m},
+        "soil_time_histories.csv": {
+            "t_s": soil.t_s,
+            **{f"disp_{d:g}m_m": row for d, row in zip(soil.depth_m, soil.disp_m, strict=True)},
+        },
+        "longterm_settlement.csv": {"years": lt.years, "settlement_m": lt.settlement_m},
+        "longterm_depth.csv": {
+            "depth_m": lt.depth_m,
+            "deviator_Pa": lt.deviator_Pa,
+            "strength_Pa": lt.strength_Pa,
+            "stress_ratio": lt.stress_ratio,
+            "static_deviator_Pa": lt.static_deviator_Pa,
+            "vertical_effective_stress_Pa": lt.vertical_effective_stress_Pa,
+            "cycles_per_train": lt.cycles_per_train,
+            "n_cycles": lt.n_cycles,
+            "strain_percent": lt.strain_percent,
+        },
+    }
+    written = []
+    for name, columns in tables.items():
+        path = out / name
+        np.savetxt(
+            path,
+            np.column_stack(list(columns.values())),
+            delimiter=",",
+            header=",".join(columns),
+            comments="",
+            fmt="%.9g",
+        )
+        written.append(path)
+    scenario_path = out / "scenario.json"
+    scenario_path.write_text(results.scenario_json + "\n", encoding="utf-8")
+    summary_path = out / "summary.json"
+    summary = {
+        "summary": results.summary(),
+        "longterm_law": lt.statement,
+        "warnings": results.warnings,
+        "stage_seconds": results.stage_seconds,
+    }
+    summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    return [*written, scenario_path, summary_path]
+
+
+SUBCOMMANDS = {"study": "model.study.cli", "fe": "model.fe.cli"}
+"""Subcommand → module whose ``main(argv)`` handles it."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the process exit code (2 for bad input)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in SUBCOMMANDS:
+        module = importlib.import_module(SUBCOMMANDS[argv[0]])
+        return module.main(argv[1:])
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        scenario = load_scenario(args)
+        scenario.validate()
+        estimate = estimate_run(scenario)
+        prepare_output_folder(args.out, args.force)
+        if estimate.total_seconds > SLOW_RUN_SECONDS and not args.quiet:
+            print(f"warning: {estimate.slow_message()}", file=sys.stderr)
+        progress = None if args.quiet else TerminalProgress()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SlowRunWarning)  # told above
+                results = run(scenario, progress=progress, cache=None)
+        finally:
+            if progress is not None:
+                progress.close()
+    except (ValueError, KeyError, OSError, SimulationError) as error:
+        message = error.args[0] if isinstance(error, KeyError) and error.args else error
+        parser.exit(2, f"error: {message}\n")
+    paths = write_results(results, args.out)
+    if not args.quiet:
+        for warning in results.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+        summary = results.summary()
+        print(
+            f"{scenario.tunnel.model} tunnel–soil model: "
+            f"peak invert force {summary['peak_invert_force_N'] / 1e3:.1f} kN, "
+            f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
+            f"at {COMPARISON_DEPTH_M:g} m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
+            "long-term settlement after "
+            f"{scenario.longterm.years:g} years {summary['longterm_settlement_m'] * 1e3:.2f} mm; "
+            f"{len(paths)} files in {args.out}"
+        )
+    return 0

@@ -1,0 +1,303 @@
+"""Running the FE section: passages under the line-load history, peaks and permanent displacement.
+
+- **Dynamics.** Newmark average acceleration (γ = 1/2, β = 1/4). Rayleigh damping
+  C = a₀M + a₁K_init with ζ = η_G/2 at the two ends of the load band [f_lo, f_hi] (below that
+  band the mass term over-damps, between the ends ζ dips below η_G/2). The line load of the
+  pipeline (docs/model.md §6) is averaged over each FE step (a box filter that keeps the impulse)
+  and applied downward at the invert.
+- **Passages.** Each passage is followed by a quiet tail (R/c₂ plus the boundary's relaxation
+  time ρc₁R/(α_N G): waves leave, the response decays),
+  then a static equilibrium solve with the train gone: for elastic soil it returns exactly to
+  the state before the passage, so the displacement left is the permanent (plastic) one. The
+  next passage starts from rest.
+
+Displacements are reported downward positive, relative to the state before the first passage,
+on the nodes below the invert (depth = r − a, below the ring–soil interface as in
+``model.soil.section_2d.invert_receptance``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from model.fe.build import (
+    SPRING_NORMAL,
+    FEConvergenceError,
+    add_boundary,
+    add_lining,
+    apply_gravity,
+    build_section,
+    opensees,
+    static_equilibrium,
+    transient_analysis,
+)
+from model.fe.inputs import LoadBand, load_band, rayleigh_coefficients, resample_load
+from model.fe.mesh import ELEMENTS_PER_WAVELENGTH, FEMesh, SectionMesh, section_mesh
+from model.fe.store import FEResult
+from model.params import Scenario
+
+TAIL_BOUNDARY_TIMES = 1.0
+"""Quiet tail after each passage, in units of R/c₂ plus the boundary relaxation time."""
+SOIL_LAWS = ("elastic", "mohr_coulomb")
+UNBALANCE_TOLERANCE = 1e-6
+"""Plastic soil: a time step has converged when the unbalanced force (N, 2-norm over the model)
+is below this fraction of the peak invert load; one iteration then suffices where the soil
+stays elastic (changes the result by < 1e-6 of it, docs/fe_section.md)."""
+
+Progress = Callable[[str, float], None]
+
+
+# ---- public entry points ----------------------------------------------------------------------
+def _check_mesh(mesh: FEMesh, ring_radius: float, band: LoadBand) -> float:
+    """Largest element size to use (m); ValueError naming the numbers when too coarse."""
+    if not mesh.outer_radius > ring_radius + 1.0:
+        raise ValueError(
+            f"mesh.outer_radius = {mesh.outer_radius:g} m must exceed the ring radius "
+            f"{ring_radius:g} m by more than 1 m"
+        )
+    if mesh.steps_per_period < 4:
+        raise ValueError(f"mesh.steps_per_period = {mesh.steps_per_period} must be ≥ 4")
+    if mesh.radial_aspect < 1.0:
+        raise ValueError(f"mesh.radial_aspect = {mesh.radial_aspect:g} must be ≥ 1")
+    limit = band.shortest_wavelength_m / ELEMENTS_PER_WAVELENGTH
+    size = limit if mesh.element_size is None else mesh.element_size
+    if not 0 < size <= limit * (1 + 1e-9):
+        raise ValueError(
+            f"mesh.element_size = {size:g} m cannot resolve the shortest wavelength of the load "
+            f"band: c₂/f_high = {band.shortest_wavelength_m:.3g} m at f_high = "
+            f"{band.f_high_hz:.3g} Hz needs elements ≤ {limit:.3g} m "
+            f"({ELEMENTS_PER_WAVELENGTH} per wavelength)"
+        )
+    return size
+
+
+def run_fe(
+    scenario: Scenario,
+    soil_law: str = "elastic",
+    passages: int = 1,
+    mesh: FEMesh | None = None,
+    progress: Progress | None = None,
+    load: tuple[np.ndarray, float] | None = None,
+) -> FEResult:
+    """Run the OpenSeesPy plane-strain section under the line-load history at the invert.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Tunnel (with its axis depth), soil (E, ν, ρ, η_G) and the long-term ground parameters
+        (water table, φ′ for K0, c_u); the load comes from ``model.pipeline.run(scenario)``.
+    soil_law : {"elastic", "mohr_coulomb"}
+        Soil model (the soil laws of ``model.fe.build``).
+    passages : int
+        Passages in a row, ≥ 1.
+    mesh : FEMesh, optional
+        Mesh and boundary; default ``FEMesh()``.
+    progress : callable(stage, fraction), optional
+        Told "load", "gravity" and "dynamic" with the fraction done, 0 to 1.
+    load : (ndarray, float), optional
+        A line-load history (N/m) and its sampling interval (s) to use instead of the
+        pipeline's.
+
+    Returns
+    -------
+    FEResult
+
+    Raises
+    ------
+    ValueError
+        Unknown law, bad passages, or a mesh that cannot resolve the load band.
+    FEUnavailableError
+        OpenSeesPy missing or its shared library not loadable.
+    """
+    if soil_law not in SOIL_LAWS:
+        raise ValueError(f"soil_law = {soil_law!r} must be one of {SOIL_LAWS}")
+    if not (isinstance(passages, int) and 1 <= passages <= 100):
+        raise ValueError(f"passages = {passages!r} must be an integer in [1, 100]")
+    mesh = mesh or FEMesh()
+    report = progress or (lambda stage, fraction: None)
+    ops = opensees()
+    timings = {}
+    start = time.perf_counter()
+    report("load", 0.0)
+    if load is None:
+        from model.pipeline import STAGES, run
+
+        def pipeline_progress(stage: str, fraction: float) -> None:
+            report("load", (STAGES.index(stage) + fraction) / len(STAGES))
+
+        results = run(scenario, progress=pipeline_progress, cache=None)
+        q_raw, dt_raw = results.load.line_load_N_per_m, float(results.load.t_s[1])
+    else:
+        q_raw, dt_raw = np.asarray(load[0], dtype=float), float(load[1])
+    soil, tunnel = scenario.soil, scenario.tunnel
+    band = load_band(q_raw, dt_raw, soil.s_wave_speed)
+    size = _check_mesh(mesh, tunnel.ring_radius, band)
+    q, dt = resample_load(q_raw, dt_raw, 1.0 / (mesh.steps_per_period * band.f_high_hz))
+    timings["load"] = time.perf_counter() - start
+    report("load", 1.0)
+
+    start = time.perf_counter()
+    report("gravity", 0.0)
+    grid = section_mesh(tunnel.ring_radius, mesh.outer_radius, size, mesh.radial_aspect)
+    book = build_section(ops, scenario, grid, soil_law, mesh.plastic_radius)
+    anchor = apply_gravity(ops, scenario, grid, soil_law)
+    ops.remove("element", anchor)
+    add_lining(ops, scenario, grid)
+    add_boundary(ops, scenario, grid)
+    static_equilibrium(ops)
+    timings["gravity"] = time.perf_counter() - start
+    report("gravity", 1.0)
+
+    # one passage = load record + quiet tail; the boundary relaxes in ~ρ c₁ R / (α_N G)
+    relax = soil.p_wave_speed * mesh.outer_radius / (SPRING_NORMAL * soil.s_wave_speed**2)
+    n_tail = max(
+        3, math.ceil(TAIL_BOUNDARY_TIMES * (mesh.outer_radius / soil.s_wave_speed + relax) / dt)
+    )
+    n_passage = q.size + n_tail
+    history = np.concatenate([np.concatenate([q, np.zeros(n_tail)])] * passages)
+    a0, a1 = rayleigh_coefficients(soil.shear_loss_factor, band.f_low_hz, band.f_high_hz)
+    ops.timeSeries("Path", 3, "-dt", dt, "-values", *history.tolist(), 0.0)
+    ops.pattern("Plain", 3, 3)
+    ops.load(int(grid.node_tag(0, 0)), 0.0, -0.5)  # half the line load on the half model
+
+    depth_nodes = [int(grid.node_tag(i, 0)) for i in range(grid.n_rings + 1)]
+    reference = np.array([ops.nodeDisp(n, 2) for n in depth_nodes])
+    disp = np.zeros((len(depth_nodes), history.size + 1))
+    residual = np.zeros((passages, len(depth_nodes)))
+    start = time.perf_counter()
+    step = iterations = 0
+    report("dynamic", 0.0)
+    for passage in range(passages):
+        transient_analysis(ops, soil_law, a0, a1, UNBALANCE_TOLERANCE * 0.5 * np.abs(history).max())
+        for _ in range(n_passage):
+            if ops.analyze(1, dt) != 0:
+                raise FEConvergenceError(
+                    f"the dynamic analysis did not converge at t = {(step + 1) * dt:.3f} s"
+                )
+            step += 1
+            iterations += max(ops.testIter(), 1)  # the linear algorithm solves once, reports 0
+            disp[:, step] = reference - np.array([ops.nodeDisp(n, 2) for n in depth_nodes])
+            if step % 50 == 0:
+                report("dynamic", step / history.size)
+        end = (passage + 1) * n_passage * dt
+        ops.setTime(end - 1.5 * dt)  # between two samples of the quiet tail: no train load
+        static_equilibrium(ops)
+        ops.setTime(end)
+        residual[passage] = reference - np.array([ops.nodeDisp(n, 2) for n in depth_nodes])
+    timings["dynamic"] = time.perf_counter() - start
+    report("dynamic", 1.0)
+    peaks = np.array(
+        [disp[:, 1 + p * n_passage : 1 + (p + 1) * n_passage].max(axis=1) for p in range(passages)]
+    )
+    info = {
+        "outer_radius_m": float(grid.radii[-1]),
+        "element_size_m": float(size),
+        "largest_edge_m": grid.largest_edge,
+        "n_theta": grid.n_theta,
+        "n_rings": grid.n_rings,
+        "n_elements": book["n_elements"],
+        "n_plastic_elements": book["n_plastic"],
+        "n_nodes": (grid.n_rings + 1) * (grid.n_theta + 1),
+        "band_hz": [band.f_low_hz, band.f_high_hz],
+        "shortest_wavelength_m": band.shortest_wavelength_m,
+        "dt_s": dt,
+        "steps_per_passage": n_passage,
+        "iterations_per_step": iterations / step,
+        "rayleigh_a0_per_s": a0,
+        "rayleigh_a1_s": a1,
+    }
+    ops.wipe()
+    return FEResult(
+        soil_law=soil_law,
+        passages=passages,
+        depth_m=grid.radii - grid.radii[0],
+        peak_disp_m=peaks[0],
+        residual_disp_m=residual[-1],
+        peak_per_passage_m=peaks,
+        residual_per_passage_m=residual,
+        t_s=np.arange(history.size + 1) * dt,
+        disp_m=disp,
+        load_N_per_m=np.concatenate([[0.0], history]),
+        mesh=info,
+        timings_s=timings,
+        scenario_json=scenario.to_json(),
+    )
+
+
+def gravity_state(scenario: Scenario, soil_law: str = "elastic", mesh: FEMesh | None = None):
+    """Element stresses after the gravity stage (before the lining and the boundary).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Soil and long-term ground parameters.
+    soil_law : {"elastic", "mohr_coulomb"}
+        Soil model; the plastic one carries the deviatoric part of the field.
+    mesh : FEMesh, optional
+        Mesh; ``element_size`` must be given.
+
+    Returns
+    -------
+    x_m, y_m : ndarray
+        (n_rings, n_theta) element centroids (m), y up from the tunnel axis.
+    stress_Pa : ndarray
+        (n_rings, n_theta, 3) element-average σ_xx, σ_yy, τ_xy (Pa, tension positive).
+    """
+    mesh = mesh or FEMesh()
+    if mesh.element_size is None:
+        raise ValueError("gravity_state needs mesh.element_size (there is no load band)")
+    ops = opensees()
+    grid = section_mesh(
+        scenario.tunnel.ring_radius, mesh.outer_radius, mesh.element_size, mesh.radial_aspect
+    )
+    build_section(ops, scenario, grid, soil_law, mesh.plastic_radius)
+    apply_gravity(ops, scenario, grid, soil_law)
+    stress = _element_stress(ops, grid)
+    ops.wipe()
+    return (*grid.centroids(), stress)
+
+
+def _element_stress(ops, mesh: SectionMesh) -> np.ndarray:
+    """(n_rings, n_theta, 3) element-average σ_xx, σ_yy, τ_xy (Pa, tension +)."""
+    out = np.empty((mesh.n_rings, mesh.n_theta, 3))
+    for i in range(mesh.n_rings):
+        for j in range(mesh.n_theta):
+            s = np.asarray(ops.eleResponse(1 + i * mesh.n_theta + j, "stresses"))
+            out[i, j] = s.reshape(4, -1)[:, :3].mean(axis=0)
+    return out
+
+
+def analytical_profile(scenario: Scenario, line_load_N_per_m, dt_s: float, depth_m):
+    """Peak downward displacement of the analytical 2D model (docs/model.md §7–8) at given depths.
+
+    ``model.soil.response.soil_response`` on the same load history, its depth grid reaching the
+    deepest requested depth; interpolated (linearly) to ``depth_m``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Tunnel, soil and numerics (n_harmonics, soil_max_frequency, zero_pad_factor).
+    line_load_N_per_m : array_like
+        Line-load history (N/m) sampled at ``dt_s`` (s).
+    dt_s : float
+        Sampling interval (s).
+    depth_m : array_like
+        Depths below the ring–soil interface (m), ≥ 0.
+
+    Returns
+    -------
+    ndarray
+        Peak downward displacement (m) at each depth.
+    """
+    from model.soil.response import soil_response
+
+    depth = np.asarray(depth_m, dtype=float)
+    numerics = scenario.copy().numerics
+    numerics.max_depth = max(11.0, float(depth.max()))  # the parameter's lower bound
+    numerics.n_depths = max(2, math.ceil(numerics.max_depth / 0.25) + 1)
+    response = soil_response(line_load_N_per_m, dt_s, scenario.tunnel, scenario.soil, numerics)
+    return np.interp(depth, response.depth_m, response.peak_disp_m)

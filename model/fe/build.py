@@ -1,0 +1,306 @@
+"""The OpenSees model of the section: soil, lining, boundary, the gravity stage and the analyses.
+
+- **Lining.** Elastic beam elements (``elasticBeamColumn``) on the ring radius a, the chords of
+  the circle between the soil nodes of the first ring, with the plane-strain modulus
+  E/(1 − ν²), area h·1 m, inertia h³/12 and mass ρh per metre: the thin ring of docs/model.md
+  §7, with the soil starting at the ring radius, as in the analytical model. Added after the
+  gravity stage, tied to the soil nodes by stiff links (see :func:`add_lining`).
+- **Absorbing boundary.** Viscous–spring (Kelvin) boundary on the circle r = R: per unit length
+  a Lysmer–Kuhlemeyer dashpot ρc₁ normal and ρc₂ tangential, in parallel with springs
+  α_N G/R and α_T G/R (α_N = 1, α_T = 1/2; Deeks & Randolph 1994, Liu et al. 2006), which carry
+  the static part of the load that pure dashpots would let drift away (a 2D domain on dashpots
+  alone moves by ∫q dt / C: ~2 cm per passage here). ``zeroLength`` elements with an elastic
+  material that has a damping tangent, oriented radially, lumped at the boundary nodes by
+  their tributary arc length.
+- **Gravity with K0 first.** The geostatic stress of the level ground above, extended linearly
+  over the whole (full-space) mesh: total vertical stress σ_v = ρ g z at depth z = H_t − y
+  below the surface (H_t = ``tunnel.axis_depth``), pore pressure u = γ_w (z − z_w), effective
+  σ′_v = σ_v − u, horizontal σ_h = K0 σ′_v + u with K0 = 1 − sin φ′ (``longterm``). It is set up
+  by the body force ρ g and the tractions of that field on the outer boundary (a linear stress
+  field is compatible, so the elastic solution reproduces it exactly away from the tunnel),
+  the lining wished in place with its own weight; the tunnel perturbs the field locally.
+- **Soil laws.** ``"elastic"``: ``ElasticIsotropic`` (E, ν, ρ). ``"mohr_coulomb"``: the
+  undrained (φ_u = 0) Mohr–Coulomb, i.e. Tresca, criterion matched in plane strain by
+  Drucker–Prager with zero friction, i.e. von Mises with σ_Y = √3 c_u (OpenSees
+  ``J2Plasticity``, perfectly plastic, associated), with the
+  undrained strength c_u(z) of docs/model.md §10 (``longterm.cu_ratio`` × σ′_v0, or
+  ``longterm.undrained_strength``). Why undrained and c_u: a passage lasts seconds, far too short
+  for the soft clay to drain; the strength is the one the long-term model uses. Because the
+  φ = 0 criterion ignores the mean stress, the plastic model carries the geostatic stress
+  minus its in-plane mean (a statically admissible isotropic part removed, body force
+  adjusted): the deviator is the K0 one and the out-of-plane stress equals the in-plane mean,
+  as in undrained plane strain, where the drained Poisson ratio would otherwise put an
+  out-of-plane deviator into the criterion. Only elements within ``FEMesh.plastic_radius`` of
+  the axis and below the ground surface are plastic; the others (including the fictitious upper
+  part of the full space) stay elastic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from model.fe.inputs import drucker_prager_plane_strain, geostatic, undrained_strength
+from model.fe.mesh import SectionMesh, arc_loads, body_loads
+from model.params import Scenario
+
+SPRING_NORMAL, SPRING_TANGENTIAL = 1.0, 0.5
+"""α_N, α_T of the viscous–spring boundary (springs α G / R per unit length)."""
+DISP_TOLERANCE = 1e-9
+"""Plastic soil: a time step has also converged when the displacement correction (m, 2-norm)
+is below this."""
+PENALTY = 1e14
+"""Penalty factor of the lining's equalDOF ties (N/m): 100 × LINK_STIFFNESS."""
+LINK_STIFFNESS = 1e12
+"""Soil–lining link stiffness (N/m per metre): 1e6 × the soil's G, 30 × the lining's EA/length,
+so the links stretch by ~1e-8 m under the train load (mm response)."""
+FE_EXTRA_MESSAGE = (
+    "the FE section needs OpenSeesPy: install the 'fe' extra (pip install \".[fe]\") and, on "
+    "Debian/Ubuntu, its BLAS/LAPACK libraries (apt-get install libopenblas0 liblapack3)"
+)
+
+
+class FEUnavailableError(RuntimeError):
+    """OpenSeesPy is not installed or its shared library cannot be loaded."""
+
+
+class FEConvergenceError(RuntimeError):
+    """An OpenSees analysis stage did not converge; the message says where."""
+
+
+def opensees():
+    """The ``openseespy.opensees`` module, or FEUnavailableError with the one-line fix."""
+    try:
+        import openseespy.opensees as ops
+    except (ImportError, OSError) as error:  # OSError/ImportError: missing BLAS/LAPACK too
+        raise FEUnavailableError(f"{FE_EXTRA_MESSAGE} ({error})") from error
+    return ops
+
+
+# ---- model building ---------------------------------------------------------------------------
+def _next_tag(tags) -> int:
+    """A tag above every tag in use."""
+    return int(max(tags, default=0)) + 1
+
+
+def _stress_field(scenario: Scenario, soil_law: str):
+    """(σ_xx(y), σ_yy(y)) in OpenSees sign (tension +) and the body force b_y(y) (N/m³)."""
+    field_ = geostatic(scenario)
+    if soil_law == "elastic":
+
+        def sxx(y):
+            return -field_.horizontal(y)
+
+        def syy(y):
+            return -field_.vertical(y)
+
+    else:  # deviatoric part: the isotropic in-plane mean removed (module docstring)
+
+        def sxx(y):
+            return 0.5 * (field_.vertical(y) - field_.horizontal(y))
+
+        def syy(y):
+            return -sxx(y)
+
+    slope = syy(1.0) - syy(0.0)  # linear in y: ∂σ_yy/∂y
+
+    def body(y):
+        return -slope * np.ones_like(np.asarray(y, dtype=float))
+
+    return sxx, syy, body
+
+
+def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, plastic_radius: float):
+    """Soil nodes, materials, quads and the symmetry conditions; returns bookkeeping."""
+    soil = scenario.soil
+    ops.wipe()
+    ops.model("basic", "-ndm", 2, "-ndf", 2)
+    nr, nt = mesh.n_rings, mesh.n_theta
+    for i in range(nr + 1):
+        for j in range(nt + 1):
+            ops.node(int(mesh.node_tag(i, j)), *map(float, mesh.xy(i, j)))
+    for i in range(nr + 1):
+        ops.fix(int(mesh.node_tag(i, 0)), 1, 0)
+        ops.fix(int(mesh.node_tag(i, nt)), 1, 0)
+
+    shear, bulk = soil.shear_modulus, soil.bulk_modulus
+    rho = soil.density
+    n_elements = nr * nt
+    ele_x, ele_y = mesh.centroids()
+    ops.nDMaterial("ElasticIsotropic", 1, soil.youngs_modulus, soil.poisson_ratio, rho)
+    plastic = (soil_law == "mohr_coulomb") & (np.hypot(ele_x, ele_y) <= plastic_radius)
+    plastic &= ele_y < scenario.tunnel.axis_depth
+    strength = undrained_strength(scenario, ele_y)
+    for i in range(nr):
+        for j in range(nt):
+            tag = 1 + i * nt + j
+            mat = 1
+            if plastic[i, j]:
+                mat = 1 + tag
+                sigma_y, rho_dp = drucker_prager_plane_strain(max(strength[i, j], 1.0), 0.0)
+                ops.nDMaterial("J2Plasticity", mat, bulk, shear, sigma_y, sigma_y, 0.0, 0.0)
+            nodes = [
+                mesh.node_tag(a, b) for a, b in [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
+            ]
+            ops.element("quad", tag, *map(int, nodes), 1.0, "PlaneStrain", mat, 0.0, rho, 0.0, 0.0)
+
+    return {"n_elements": n_elements, "n_plastic": int(plastic.sum())}
+
+
+def add_lining(ops, scenario: Scenario, mesh: SectionMesh) -> None:
+    """Lining beams on the first ring, added stress-free in the stressed ground.
+
+    The beam nodes are new, at rest on the undeformed circle, and tied to the soil nodes by
+    stiff links (``zeroLength``, LINK_STIFFNESS per direction) that measure from the moment they
+    are added: the gravity displacement of the soil (up to ~1 m with E = 6 MPa: the strain of the
+    whole geostatic state) neither loads nor distorts the ring."""
+    tunnel = scenario.tunnel
+    nt = mesh.n_theta
+    ops.model("basic", "-ndm", 2, "-ndf", 3)
+    beam_base = _next_tag(ops.getNodeTags())
+    ele_base = _next_tag(ops.getEleTags())
+    link_material = 1  # the other uniaxial materials take tags derived from element tags (> 1)
+    ops.uniaxialMaterial("Elastic", link_material, LINK_STIFFNESS)
+    for j in range(nt + 1):
+        ops.node(beam_base + j, *map(float, mesh.xy(0, j)))
+    ops.fix(beam_base, 0, 0, 1)
+    ops.fix(beam_base + nt, 0, 0, 1)
+    ops.geomTransf("Linear", 1)
+    h = tunnel.thickness
+    e_plane = tunnel.youngs_modulus / (1.0 - tunnel.poisson_ratio**2)
+    for j in range(nt):
+        ops.element(
+            "elasticBeamColumn", ele_base + j, beam_base + j, beam_base + j + 1,
+            h, e_plane, h**3 / 12.0, 1, "-mass", tunnel.density * h,
+        )  # fmt: skip
+    # zeroLength needs the same dofs at both ends: link the soil to 2-dof twins of the beam nodes
+    ops.model("basic", "-ndm", 2, "-ndf", 2)
+    twin_base = beam_base + nt + 1
+    for j in range(nt + 1):
+        ops.node(twin_base + j, *map(float, mesh.xy(0, j)))
+        ops.equalDOF(twin_base + j, beam_base + j, 1, 2)
+        ops.element(
+            "zeroLength", ele_base + nt + j, int(mesh.node_tag(0, j)), twin_base + j,
+            "-mat", link_material, link_material, "-dir", 1, 2,
+        )  # fmt: skip
+
+
+def apply_gravity(ops, scenario, mesh, soil_law):
+    """Static gravity stage: body force and the geostatic tractions on both arcs (the inner one
+    stands for the soil inside the tunnel); returns the link element holding the bottom node."""
+    sxx, syy, body = _stress_field(scenario, soil_law)
+
+    def traction(x, y, normal):
+        return np.array([sxx(y) * normal[0], syy(y) * normal[1]])
+
+    forces = np.zeros((mesh.n_rings + 1, mesh.n_theta + 1, 2))
+    forces[..., 1] = body_loads(mesh, body)
+    forces[0] += arc_loads(mesh, 0, traction)
+    forces[-1] += arc_loads(mesh, mesh.n_rings, traction)
+    ops.timeSeries("Linear", 1)
+    ops.pattern("Plain", 1, 1)
+    for i in range(mesh.n_rings + 1):
+        for j in range(mesh.n_theta + 1):
+            ops.load(int(mesh.node_tag(i, j)), *map(float, forces[i, j]))
+    # hold the bottom axis node vertically by a stiff link to a fixed node: the loads balance,
+    # so it carries only the discretisation's imbalance, and it is removed after gravity
+    anchor = _next_tag(ops.getEleTags())
+    ghost = _next_tag(ops.getNodeTags())
+    ops.node(ghost, *ops.nodeCoord(int(mesh.node_tag(mesh.n_rings, 0))))
+    ops.fix(ghost, 1, 1)
+    stiffness = 1e3 * scenario.soil.youngs_modulus
+    ops.uniaxialMaterial("Elastic", anchor, stiffness)
+    ops.element("zeroLength", anchor, ghost, int(mesh.node_tag(mesh.n_rings, 0)), "-mat", anchor,
+                "-dir", 2)  # fmt: skip
+    ops.constraints("Penalty", PENALTY, PENALTY)
+    ops.numberer("RCM")
+    ops.system("UmfPack")
+    ops.test("NormDispIncr", 1e-9, 50)
+    ops.algorithm("Newton")
+    n_steps = 1 if soil_law == "elastic" else 10
+    ops.integrator("LoadControl", 1.0 / n_steps)
+    ops.analysis("Static")
+    if ops.analyze(n_steps) != 0:
+        raise FEConvergenceError(
+            "the gravity stage did not converge (soil too weak for its K0 state?)"
+        )
+    ops.loadConst("-time", 0.0)
+    return anchor
+
+
+def add_boundary(ops, scenario, mesh):
+    """Viscous–spring boundary on r = R.
+
+    Added after gravity: OpenSees' zeroLength measures its deformation from the node
+    displacements at the time it is added, so the springs start unloaded."""
+    soil = scenario.soil
+    radius = mesh.radii[-1]
+    i = mesh.n_rings
+    d_theta = mesh.thetas[1] - mesh.thetas[0]
+    ghost_base = _next_tag(ops.getNodeTags())
+    ele_base = _next_tag(ops.getEleTags())
+    for j in range(mesh.n_theta + 1):
+        node = int(mesh.node_tag(i, j))
+        length = radius * d_theta * (0.5 if j in (0, mesh.n_theta) else 1.0)
+        x, y = mesh.xy(i, j)
+        ghost = int(ghost_base + j)
+        ops.node(ghost, float(x), float(y))
+        ops.fix(ghost, 1, 1)
+        normal_mat, tangential_mat = 2 * (ele_base + j), 2 * (ele_base + j) + 1
+        ops.uniaxialMaterial(
+            "Elastic", normal_mat, SPRING_NORMAL * soil.shear_modulus / radius * length,
+            soil.density * soil.p_wave_speed * length,
+        )  # fmt: skip
+        ops.uniaxialMaterial(
+            "Elastic", tangential_mat, SPRING_TANGENTIAL * soil.shear_modulus / radius * length,
+            soil.density * soil.s_wave_speed * length,
+        )  # fmt: skip
+        theta = mesh.thetas[j]
+        radial = (math.sin(theta), -math.cos(theta), 0.0)
+        tangential = (math.cos(theta), math.sin(theta), 0.0)
+        ops.element(
+            "zeroLength", int(ele_base + j), ghost, node, "-mat", normal_mat, tangential_mat,
+            "-dir", 1, 2, "-orient", *radial, *tangential,
+        )  # fmt: skip
+
+
+def static_equilibrium(ops):
+    """Static solve with the current loads, from rest (the boundary dashpots read the nodal
+    velocities, so these are zeroed first)."""
+    for node in ops.getNodeTags():
+        for dof in range(1, len(ops.nodeDisp(node)) + 1):
+            ops.setNodeVel(node, dof, 0.0, "-commit")
+            ops.setNodeAccel(node, dof, 0.0, "-commit")
+    ops.wipeAnalysis()
+    ops.constraints("Penalty", PENALTY, PENALTY)
+    ops.numberer("RCM")
+    ops.system("UmfPack")
+    ops.test("NormDispIncr", 1e-10, 100)
+    ops.algorithm("Newton")
+    ops.integrator("LoadControl", 0.0)
+    ops.analysis("Static")
+    if ops.analyze(1) != 0:
+        raise FEConvergenceError("the static equilibrium after a passage did not converge")
+
+
+def transient_analysis(ops, soil_law, a0, a1, unbalance_N):
+    """Newmark average acceleration with Rayleigh damping.
+
+    Elastic soil: one factorisation, no iterations. Plastic soil: modified Newton on the
+    tangent of the passage's first step, factorised once (with the mass term 4M/Δt² in it, it
+    needs about as many iterations as Krylov–Newton refactorised every step:
+    docs/fe_section.md); a step has converged when the unbalanced force is below
+    ``unbalance_N`` or the displacement correction below DISP_TOLERANCE."""
+    ops.wipeAnalysis()
+    ops.constraints("Penalty", PENALTY, PENALTY)
+    ops.numberer("RCM")
+    ops.system("ProfileSPD")
+    ops.rayleigh(a0, 0.0, a1, 0.0)
+    if soil_law == "elastic":
+        ops.algorithm("Linear", "-factorOnce")
+    else:
+        ops.test("NormDispOrUnbalance", DISP_TOLERANCE, unbalance_N, 100, 0)
+        ops.algorithm("ModifiedNewton", "-factoronce")
+    ops.integrator("Newmark", 0.5, 0.25)
+    ops.analysis("Transient")

@@ -1,0 +1,107 @@
+"""``python -m model fe``: the FE section from the command line, written to a folder."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from model.fe.analysis import SOIL_LAWS, run_fe
+from model.fe.build import FEConvergenceError, FEUnavailableError
+from model.fe.mesh import FEMesh
+from model.fe.store import FEResult, save_fe_result
+
+# ---- command line -----------------------------------------------------------------------------
+FE_STAGES = ("load", "gravity", "dynamic")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``python -m model fe``."""
+    from model.cli import add_scenario_arguments
+
+    parser = argparse.ArgumentParser(
+        prog="python -m model fe",
+        description="Run the OpenSeesPy plane-strain section (docs/model.md §12) and store its "
+        "depth profile of peak and permanent displacement.",
+    )
+    add_scenario_arguments(parser)
+    parser.add_argument("--law", choices=SOIL_LAWS, default="mohr_coulomb", help="soil law")
+    parser.add_argument("--passages", type=int, default=1, help="passages in a row (default 1)")
+    parser.add_argument(
+        "--outer-radius", type=float, default=FEMesh.outer_radius, help="boundary radius R (m)"
+    )
+    parser.add_argument(
+        "--element-size", type=float, default=None, help="largest element edge (m); default "
+        "from the load band",
+    )  # fmt: skip
+    parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    return parser
+
+
+def write_fe_outputs(result: FEResult, out: Path) -> list[Path]:
+    """Stored result (npz, keyed by the scenario), depth-profile CSV and summary JSON."""
+    stored = save_fe_result(result, out)
+    columns = {"depth_m": result.depth_m, "peak_disp_m": result.peak_disp_m}
+    for p, row in enumerate(result.residual_per_passage_m, start=1):
+        columns[f"residual_after_passage_{p}_m"] = row
+    profile = out / f"fe_depth_profile_{result.soil_law}.csv"
+    np.savetxt(
+        profile,
+        np.column_stack(list(columns.values())),
+        delimiter=",",
+        header=",".join(columns),
+        comments="",
+        fmt="%.9g",
+    )
+    summary = out / f"fe_summary_{result.soil_law}.json"
+    content = {
+        "soil_law": result.soil_law,
+        "passages": result.passages,
+        "peak_disp_invert_m": float(result.peak_disp_m[0]),
+        "residual_disp_invert_m": float(result.residual_disp_m[0]),
+        "mesh": result.mesh,
+        "timings_s": result.timings_s,
+    }
+    summary.write_text(json.dumps(content, indent=2) + "\n", encoding="utf-8")
+    return [stored, profile, summary]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m model fe``: returns the exit code (2 for bad input or an unavailable FE)."""
+    from model.cli import TerminalProgress, load_scenario
+    from model.pipeline import SimulationError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        scenario = load_scenario(args)
+        mesh = FEMesh(outer_radius=args.outer_radius, element_size=args.element_size)
+        progress = None if args.quiet else TerminalProgress(stages=FE_STAGES)
+        try:
+            result = run_fe(scenario, args.law, args.passages, mesh, progress=progress)
+        finally:
+            if progress is not None:
+                progress.close()
+    except (
+        ValueError,
+        KeyError,
+        OSError,
+        FEUnavailableError,
+        FEConvergenceError,
+        SimulationError,
+    ) as error:
+        message = error.args[0] if isinstance(error, KeyError) and error.args else error
+        parser.exit(2, f"error: {message}\n")
+    paths = write_fe_outputs(result, args.out)
+    if not args.quiet:
+        residual = ", ".join(f"{r * 1e3:.3f}" for r in result.residual_per_passage_m[:, 0])
+        print(
+            f"{result.soil_law}: peak displacement at the invert "
+            f"{result.peak_disp_m[0] * 1e3:.2f} mm, permanent after each passage {residual} mm; "
+            f"{result.mesh['n_elements']} elements, {sum(result.timings_s.values()):.0f} s; "
+            f"{len(paths)} files in {args.out}"
+        )
+    return 0

@@ -1,0 +1,373 @@
+"""One complete set of inputs, :class:`Scenario`: its sections, presets, JSON and dotted paths.
+
+``Scenario.validate`` checks the constraints between parameters before any computation.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import param
+
+from model.params.ground import THIN_RING_MAX_RATIO, Soil, Tunnel
+from model.params.longterm import LongTerm
+from model.params.numerics import Numerics
+from model.params.quantities import ScenarioError, _load_presets
+from model.params.track import Irregularity, Track
+from model.params.vehicle import Train, Vehicle
+
+SECTIONS = (
+    "vehicle",
+    "train",
+    "track",
+    "irregularity",
+    "tunnel",
+    "soil",
+    "numerics",
+    "longterm",
+)
+
+MOVED_PARAMETERS = {"longterm.axis_depth": "tunnel.axis_depth"}
+"""Former dotted path → current one, so that scenario files written before a parameter moved to
+another section still load (the axis depth moved to the tunnel, where later models of the ground
+need it)."""
+
+
+class Scenario(param.Parameterized):
+    """One complete set of inputs: vehicle, train, track, irregularity, tunnel, soil, numerics,
+    long-term settlement."""
+
+    vehicle = param.ClassSelector(class_=Vehicle, instantiate=True)
+    train = param.ClassSelector(class_=Train, instantiate=True)
+    track = param.ClassSelector(class_=Track, instantiate=True)
+    irregularity = param.ClassSelector(class_=Irregularity, instantiate=True)
+    tunnel = param.ClassSelector(class_=Tunnel, instantiate=True)
+    soil = param.ClassSelector(class_=Soil, instantiate=True)
+    numerics = param.ClassSelector(class_=Numerics, instantiate=True)
+    longterm = param.ClassSelector(class_=LongTerm, instantiate=True)
+
+    def __init__(self, **params):
+        classes = {name: self.param[name].class_ for name in SECTIONS}
+        for name, cls in classes.items():
+            params.setdefault(name, cls())
+        super().__init__(**params)
+
+    # ---- presets --------------------------------------------------------------------------
+    @staticmethod
+    def preset_names() -> list[str]:
+        """Names of the presets stored in ``model/data/presets.json``."""
+        return list(_load_presets())
+
+    @classmethod
+    def preset(cls, name: str) -> Scenario:
+        """Scenario of a named preset from ``model/data/presets.json``."""
+        presets = _load_presets()
+        if name not in presets:
+            raise KeyError(f"unknown preset {name!r}; available: {', '.join(presets)}")
+        scenario = cls()
+        scenario.update(presets[name]["values"])
+        return scenario
+
+    @classmethod
+    def paper(cls) -> Scenario:
+        """The paper's Nanjing case as read by docs/model.md: Type A six cars, 80 km/h, FRA 6."""
+        return cls.preset("paper")
+
+    @classmethod
+    def paper_soil_lame(cls) -> Scenario:
+        """Paper case with the soil of Table 4's Lamé constants (E ≈ 550 MPa, ν ≈ 0.44)."""
+        return cls.preset("paper_soil_lame")
+
+    @classmethod
+    def paper_soil_wave_speeds(cls) -> Scenario:
+        """Paper case with the soil of Table 4's wave speeds c1 = 524, c2 = 190 m/s."""
+        return cls.preset("paper_soil_wave_speeds")
+
+    @classmethod
+    def paper_2p5d(cls) -> Scenario:
+        """The paper's case with the 2.5D moving-load tunnel–soil model."""
+        return cls.preset("paper_2p5d")
+
+    @classmethod
+    def type_b(cls) -> Scenario:
+        """Paper case with a six-car Type B train."""
+        return cls.preset("type_b")
+
+    # ---- serialisation --------------------------------------------------------------------
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """All inputs as nested plain values, ``{section: {parameter: value}}``."""
+        return {
+            section: {name: getattr(obj, name) for name in obj.param if name != "name"}
+            for section in SECTIONS
+            for obj in [getattr(self, section)]
+        }
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """JSON text of :meth:`to_dict`; floats are written exactly (shortest repr)."""
+        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, dict[str, Any]]) -> Scenario:
+        """Scenario from :meth:`to_dict` output (missing values take their defaults).
+
+        A parameter under its former path (``MOVED_PARAMETERS``) is read at its current one.
+        """
+        scenario = cls()
+        scenario.update(_with_moved_parameters(data))
+        return scenario
+
+    @classmethod
+    def from_json(cls, text: str | bytes) -> Scenario:
+        """Scenario from :meth:`to_json` output (str, or UTF-8 bytes; a leading BOM is ignored).
+
+        Raises
+        ------
+        ValueError
+            Malformed JSON (with its line and column), non-UTF-8 bytes, nesting too deep, or
+            a bad value (naming the parameter).
+        """
+        if isinstance(text, bytes):
+            try:
+                text = text.decode("utf-8-sig")
+            except UnicodeDecodeError as error:
+                raise ValueError(
+                    f"scenario is not UTF-8 text (byte {error.start}: {error.reason})"
+                ) from None
+        try:
+            data = json.loads(text.removeprefix("\ufeff"))
+        except RecursionError:
+            raise ValueError("scenario JSON is nested too deeply to be a scenario") from None
+        return cls.from_dict(data)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> Scenario:
+        """Scenario from a JSON file written by a run or the dashboard's "Save scenario".
+
+        A relative ``irregularity.profile_csv`` is resolved against the file's folder (not the
+        working directory), so a scenario and its profile can be moved together.
+
+        Raises
+        ------
+        ValueError
+            The file cannot be read or is not a valid scenario; the message names the file.
+        """
+        path = Path(path)
+        try:
+            scenario = cls.from_json(path.read_bytes())
+        except OSError as error:
+            raise ValueError(f"{path}: cannot read the scenario file ({error.strerror})") from None
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}") from None
+        except KeyError as error:
+            raise ValueError(f"{path}: {error.args[0] if error.args else error}") from None
+        profile = scenario.irregularity.profile_csv
+        if profile and not Path(profile).is_absolute():
+            scenario.irregularity.profile_csv = str((path.parent / profile).resolve())
+        return scenario
+
+    def copy(self) -> Scenario:
+        """Independent deep copy."""
+        return type(self).from_dict(self.to_dict())
+
+    def update(self, values: dict[str, dict[str, Any]]) -> None:
+        """Set parameters from ``{section: {parameter: value}}``; unknown names are refused.
+
+        All or nothing: if any value is refused, every parameter keeps its previous value.
+        """
+        self._check_update(values)
+        before = {
+            section: {name: getattr(getattr(self, section), name) for name in section_values}
+            for section, section_values in values.items()
+        }
+        try:
+            for section, section_values in values.items():
+                getattr(self, section).param.update(**section_values)
+        except Exception:
+            for section, old_values in before.items():
+                getattr(self, section).param.update(**old_values)
+            raise
+
+    def _check_update(self, values) -> None:
+        """Refuse an update that is not ``{known section: {known parameter: value}}``."""
+        if not isinstance(values, dict):
+            raise ValueError(
+                f"a scenario must be an object of sections, not {type(values).__name__}"
+            )
+        for section, section_values in values.items():
+            if section in SECTIONS and not isinstance(section_values, dict):
+                raise ValueError(
+                    f"section {section!r} must be an object of parameters, not "
+                    f"{type(section_values).__name__}"
+                )
+            if section not in SECTIONS:
+                raise KeyError(f"unknown section {section!r}; expected one of {SECTIONS}")
+            obj = getattr(self, section)
+            unknown = (set(section_values) - set(obj.param)) | ({"name"} & set(section_values))
+            if unknown:
+                raise KeyError(f"unknown parameter(s) {sorted(unknown)} in section {section!r}")
+
+    def set_value(self, path: str, value: Any) -> None:
+        """Set one parameter by dotted path, e.g. ``set_value("train.speed_kmh", 60)``.
+
+        A string value is converted to the parameter's type ("none" gives None for optional
+        parameters).
+        """
+        section, _, name = path.partition(".")
+        if section not in SECTIONS or not name:
+            raise KeyError(
+                f"{path!r} is not of the form section.parameter with section in {SECTIONS}"
+            )
+        obj = getattr(self, section)
+        if name not in obj.param or name == "name":
+            raise KeyError(
+                f"unknown parameter {name!r} in section {section!r}; available: "
+                f"{', '.join(n for n in obj.param if n != 'name')}"
+            )
+        if isinstance(value, str):
+            value = _parse_value(obj.param[name], path, value)
+        setattr(obj, name, value)
+
+    # ---- derived quantities that need more than one section --------------------------------
+    @property
+    def car_body_pitch_inertia(self) -> float:
+        """Car body pitch inertia (kg·m²): the given value, or M_c·L_car²/12 when None."""
+        given = self.vehicle.car_body_pitch_inertia
+        if given is not None:
+            return given
+        return self.vehicle.car_body_mass * self.train.car_length**2 / 12.0
+
+    @property
+    def rail_length(self) -> float:
+        """Rail length L (m), a whole number of block spacings.
+
+        The leading axle starts ``approach_distance`` before the monitored block at mid-length
+        and the trailing axle ends the same distance past it, every axle staying
+        ``rail_end_margin`` from both rail ends: L ≥ 2 (margin + approach + axle span).
+        """
+        n = self.numerics
+        needed = 2.0 * (n.rail_end_margin + n.approach_distance + self.train.axle_span)
+        n_spacings = math.ceil(needed / self.track.block_spacing - 1e-9)
+        n_spacings += n_spacings % 2  # even, so the mid-length point is a block position
+        return n_spacings * self.track.block_spacing
+
+    @property
+    def rail_modes(self) -> int:
+        """Number of rail modes used: the given value, or L/L_s (docs/model.md §2)."""
+        if self.numerics.n_rail_modes is not None:
+            return self.numerics.n_rail_modes
+        return round(self.rail_length / self.track.block_spacing)
+
+    @property
+    def passage_duration(self) -> float:
+        """Simulated time (s): leading axle from approach to trailing axle past the block."""
+        travel = 2.0 * self.numerics.approach_distance + self.train.axle_span
+        return travel / self.train.speed
+
+    def validate(self) -> None:
+        """Check constraints between parameters; raise :class:`ScenarioError` listing all."""
+        problems = []
+        irr, tr = self.irregularity, self.train
+        if irr.wavelength_min >= irr.wavelength_max:
+            problems.append(
+                f"irregularity.wavelength_min = {irr.wavelength_min:g} m must be below "
+                f"irregularity.wavelength_max = {irr.wavelength_max:g} m"
+            )
+        if not tr.single_bogie and tr.bogie_distance + tr.wheelbase >= tr.car_length:
+            problems.append(
+                f"train.bogie_distance + train.wheelbase = {tr.bogie_distance + tr.wheelbase:g} m "
+                f"must be shorter than train.car_length = {tr.car_length:g} m"
+            )
+        if tr.wheelbase >= tr.bogie_distance and not tr.single_bogie:
+            problems.append(
+                f"train.wheelbase = {tr.wheelbase:g} m must be shorter than "
+                f"train.bogie_distance = {tr.bogie_distance:g} m"
+            )
+        min_modes = math.ceil(0.5 * self.rail_length / self.track.block_spacing)
+        if self.rail_modes < min_modes:
+            problems.append(
+                f"numerics.n_rail_modes = {self.rail_modes} is too few for a "
+                f"{self.rail_length:g} m rail: at least 0.5 L/L_s = {min_modes} are needed "
+                f"(L/L_s = {2 * min_modes} recommended)"
+            )
+        tunnel = self.tunnel
+        if tunnel.thickness > THIN_RING_MAX_RATIO * tunnel.ring_radius:
+            problems.append(
+                f"tunnel.thickness = {tunnel.thickness:g} m is more than {THIN_RING_MAX_RATIO:g} "
+                f"of the ring radius a = {tunnel.ring_radius:g} m (h/a = "
+                f"{tunnel.thickness / tunnel.ring_radius:.3g}): the thin-ring lining model does "
+                f"not hold; allowed h ≤ {THIN_RING_MAX_RATIO:g} a"
+            )
+        cover = tunnel.axis_depth - tunnel.inner_radius - tunnel.thickness
+        if cover <= 0.0:
+            problems.append(
+                f"tunnel.axis_depth = {tunnel.axis_depth:g} m puts the lining (outer "
+                f"radius {tunnel.inner_radius + tunnel.thickness:g} m) above the ground surface; "
+                "allowed: axis depth > tunnel.inner_radius + tunnel.thickness"
+            )
+        profile = irr.profile_csv
+        if irr.enabled and profile and not Path(profile).is_file():
+            problems.append(
+                f"irregularity.profile_csv = {profile!r} is not a file"
+                + ("" if Path(profile).is_absolute() else f" (relative to {Path.cwd()})")
+            )
+        if problems:
+            raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
+
+
+def _with_moved_parameters(data):
+    """``data`` with every parameter of ``MOVED_PARAMETERS`` under its current section.
+
+    Raises
+    ------
+    ValueError
+        The former and the current path are both given, with different values.
+    """
+    if not isinstance(data, dict):
+        return data  # refused, with its message, by Scenario.update
+    data = {section: dict(v) if isinstance(v, dict) else v for section, v in data.items()}
+    for old, new in MOVED_PARAMETERS.items():
+        (old_section, old_name), (new_section, new_name) = old.split("."), new.split(".")
+        values = data.get(old_section)
+        if not isinstance(values, dict) or old_name not in values:
+            continue
+        value = values.pop(old_name)
+        target = data.setdefault(new_section, {})
+        if not isinstance(target, dict):
+            continue  # refused by Scenario.update
+        if target.setdefault(new_name, value) != value:
+            raise ValueError(
+                f"{old} = {value!r} and {new} = {target[new_name]!r} disagree: {old} is the "
+                f"former path of {new}; give only {new}"
+            )
+    return data
+
+
+def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
+    """Convert command-line text to the type of ``parameter``; refuse with a clear message."""
+    if text.strip().lower() == "none" and parameter.allow_None:
+        return None
+    try:
+        if isinstance(parameter, param.Boolean):
+            lowered = text.strip().lower()
+            if lowered not in {"true", "false", "1", "0", "yes", "no"}:
+                raise ValueError
+            return lowered in {"true", "1", "yes"}
+        if isinstance(parameter, param.Number) and "_" in text:
+            raise ValueError  # int() and float() read "1_0" as 10
+        if isinstance(parameter, param.Integer):
+            return int(text)
+        if isinstance(parameter, param.Number):
+            return float(text)
+    except ValueError:
+        kind = (
+            "true/false"
+            if isinstance(parameter, param.Boolean)
+            else "whole number"
+            if isinstance(parameter, param.Integer)
+            else "number"
+        )
+        raise ValueError(f"{path} = {text!r} is not a {kind} ({parameter.label})") from None
+    return text

@@ -1,0 +1,19 @@
+"""Load → soil: the tunnel–soil response under the invert line load (one stage of the chain).
+
+Paper §3 and §4.2, docs/model.md §7–9; implementation notes in docs/tunnel_soil.md (2D) and
+docs/tunnel_soil_3d.md (2.5D).
+
+- ``bessel``: K₀, K₁ of complex argument and the one ratio recurrence K_{n+1}/K_n that both
+  kernels use;
+- ``inputs``: the lining and soil constants the kernels take, checked, and the invert load's
+  Fourier coefficients;
+- ``section_2d``: the paper's plane-strain section, a thin ring in a full-space per harmonic:
+  :func:`invert_receptance`, the soil field and the ring's motion (§7);
+- ``moving_load_2p5d``: the lining as a Flügge shell along the tunnel, loaded by
+  exp(i(ωt − ξx)): :func:`receptance_2p5d` and the stresses under the invert (§9);
+- ``point_load``: the point-force response of the 2.5D model, the wavenumber integral of H;
+- ``response``: the line-load history through the chosen kernel to displacement histories at
+  depth, their peaks and spectra (§8) — the *transient* response, not the permanent settlement;
+- ``stresses``: the dynamic stresses and deviator under the invert per passage, from the same
+  kernel evaluation, which drive the long-term stage (§10).
+"""

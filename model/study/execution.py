@@ -1,0 +1,294 @@
+"""Running a study on Dask distributed: the task, the client, progress and cancelling.
+
+Every run is the task :func:`run_summary`, a pure function of the scenario's JSON, so a worker
+anywhere computes exactly what :func:`model.pipeline.run` computes in-process. Runs go to a
+``LocalCluster`` sized to this machine by default, or an existing scheduler
+(``tcp://host:port``, argument or ``TUNNELSETTLE_SCHEDULER``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import re
+import threading
+import time
+import uuid
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import numba
+import pandas as pd
+
+from model.params import Scenario
+from model.pipeline import StageCache, run
+from model.study.definition import Study, check_run_count, define_study
+from model.study.tables import PROFILE_COLUMN
+
+SCHEDULER_ENV = "TUNNELSETTLE_SCHEDULER"
+"""Environment variable with the address of an existing Dask scheduler to use by default."""
+CONNECT_TIMEOUT_S = 5.0
+CANCEL_WAIT_S = 300.0  # a cancelled task already executing is waited for, at most this long
+POLL_S = 0.05  # how often the collecting loop looks at the cancel flag when nothing finished
+_ADDRESS_RE = re.compile(r"^(tcp|tls|ucx|ws|wss)://[^\s:/]+:\d+$")
+
+Progress = Callable[[int, int, dict[str, Any]], None]
+"""Called with (runs done, runs in all, the finished run's row) as each run comes back."""
+
+# The process's last run, stages and tunnel–soil transfer functions: a study's runs that differ
+# only in the load (seeds, vehicle, track) reuse the soil kernel, the costliest part after the
+# vehicle–track integration. The values are those of a fresh run (the cache serves exactly what
+# it would compute), so each row still equals run(scenario) bit for bit.
+_TASK_CACHE = StageCache(size=1, transfer_size=1)
+
+
+# ---- the task ------------------------------------------------------------------------------
+def run_summary(scenario_json: str, depth_profile: bool = False) -> dict[str, float]:
+    """Run one scenario and return its summary numbers (the task of a study).
+
+    Parameters
+    ----------
+    scenario_json : str
+        :meth:`Scenario.to_json` text; the run depends on nothing else.
+    depth_profile : bool
+        Also return the peak displacement at every output depth, as columns
+        ``profile_peak_disp_<depth>m_m`` (m).
+
+    Returns
+    -------
+    dict
+        :meth:`Results.summary` (SI units), plus the depth profile if asked.
+    """
+    # Parallelism comes from running many tasks at once, one per worker thread: Numba's prange
+    # kernels use one thread per task so they do not oversubscribe the cores (Dask's nanny
+    # already sets OMP/MKL/OpenBLAS to one thread per worker process). Setting it here, rather
+    # than NUMBA_NUM_THREADS in the worker's environment, also holds on workers started by hand.
+    numba.set_num_threads(1)
+    results = run(Scenario.from_json(scenario_json), cache=_TASK_CACHE)
+    row = results.summary()
+    if depth_profile:
+        soil = results.soil
+        for depth, peak in zip(soil.depth_m, soil.peak_disp_m, strict=True):
+            row[PROFILE_COLUMN.format(depth=float(depth))] = float(peak)
+    return row
+
+
+# ---- running -------------------------------------------------------------------------------
+def machine_workers() -> int:
+    """Cores this process may use: the LocalCluster's number of single-threaded workers."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+@contextlib.contextmanager
+def study_client(
+    scheduler=None, n_workers: int | None = None, connect_timeout_s: float | None = None
+):
+    """A Dask client: the given one, one on an existing scheduler, or one on a new LocalCluster.
+
+    ``scheduler`` is a ``distributed.Client`` (used as is, not closed), a scheduler address
+    ``"tcp://host:port"``, or ``None``: then ``$TUNNELSETTLE_SCHEDULER`` if set, else a
+    ``LocalCluster`` of ``n_workers`` (default: the machine's cores) single-threaded worker
+    processes, closed on exit. An unreachable address is a one-line ``ValueError``.
+    """
+    from distributed import Client, LocalCluster
+
+    if isinstance(scheduler, Client):
+        yield scheduler
+        return
+    address = scheduler or os.environ.get(SCHEDULER_ENV) or None
+    connect_timeout_s = CONNECT_TIMEOUT_S if connect_timeout_s is None else connect_timeout_s
+    if address:
+        if not isinstance(address, str) or not _ADDRESS_RE.match(address):
+            raise ValueError(f"scheduler address {address!r} is not of the form tcp://host:port")
+        try:
+            client = Client(address, timeout=connect_timeout_s, set_as_default=False)
+        except (OSError, TimeoutError) as error:
+            message = " ".join(str(error).split()) or type(error).__name__
+            raise ValueError(
+                f"cannot reach the Dask scheduler at {address} within {connect_timeout_s:g} s "
+                f"({message})"
+            ) from None
+        with client:
+            yield client
+        return
+    with (
+        LocalCluster(
+            n_workers=n_workers or machine_workers(),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+        ) as cluster,
+        Client(cluster, set_as_default=False) as client,
+    ):
+        yield client
+
+
+def run_study(
+    base: Scenario,
+    vary: dict[str, Any],
+    seeds: Iterable[int] | None = None,
+    scheduler=None,
+    *,
+    sampling: str = "grid",
+    n_samples: int | None = None,
+    sampling_seed: int = 0,
+    depth_profile: bool = False,
+    progress: Progress | None = None,
+    cancel: threading.Event | None = None,
+    confirm: bool = False,
+    n_workers: int | None = None,
+    connect_timeout_s: float | None = None,
+) -> pd.DataFrame:
+    """Run a study on Dask and return one row per run.
+
+    Parameters
+    ----------
+    base, vary, seeds, sampling, n_samples, sampling_seed, depth_profile
+        The study, see :func:`define_study`.
+    scheduler : None, str or distributed.Client
+        See :func:`study_client`.
+    progress : callable(done, total, row), optional
+        Called in this thread as each run comes back (in completion order).
+    cancel : threading.Event, optional
+        Set it (from any thread) to stop: unfinished runs are cancelled and the finished ones
+        returned, with ``table.attrs["cancelled"] = True``.
+    confirm : bool
+        Required for more than :data:`MAX_RUNS_UNCONFIRMED` runs.
+    n_workers : int, optional
+        Workers of the LocalCluster (default: the machine's cores).
+    connect_timeout_s : float, optional
+        How long to try an existing scheduler's address (s), default :data:`CONNECT_TIMEOUT_S`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``run`` (the run's place in the study); columns: each varied parameter by its
+        dotted path, ``seed``, every key of :meth:`Results.summary` (SI units), the depth
+        profile if asked, and ``error`` (the message, empty when the run succeeded) only if a
+        run failed. ``attrs``: ``study`` (definition JSON), ``n_runs``, ``cancelled``.
+
+    Raises
+    ------
+    ValueError
+        Bad study (see :func:`define_study`), too many runs without ``confirm``, unreachable
+        scheduler: before any run is submitted.
+    """
+    study = define_study(
+        base, vary, seeds, sampling, n_samples, sampling_seed, depth_profile, confirm
+    )
+    return execute_study(
+        study,
+        scheduler,
+        progress=progress,
+        cancel=cancel,
+        confirm=confirm,
+        n_workers=n_workers,
+        connect_timeout_s=connect_timeout_s,
+    )
+
+
+def execute_study(
+    study: Study,
+    scheduler=None,
+    *,
+    progress: Progress | None = None,
+    cancel: threading.Event | None = None,
+    confirm: bool = False,
+    n_workers: int | None = None,
+    connect_timeout_s: float | None = None,
+) -> pd.DataFrame:
+    """Run a checked :class:`Study` (e.g. from :meth:`Study.from_json`); see :func:`run_study`."""
+    check_run_count(study.n_runs, confirm)
+    with study_client(scheduler, n_workers, connect_timeout_s) as client:
+        rows, cancelled = _collect(client, study, progress, cancel)
+    return _table(study, rows, cancelled)
+
+
+def _collect(client, study: Study, progress, cancel) -> tuple[dict[int, dict], bool]:
+    """Submit every run, gather rows as they finish; on cancel, stop the rest and wait."""
+    from distributed import as_completed
+
+    token = uuid.uuid4().hex[:12]
+    inputs, futures = [], []
+    for index, (row, scenario_json) in enumerate(study.runs()):
+        inputs.append(row)
+        futures.append(
+            client.submit(
+                run_summary,
+                scenario_json,
+                study.depth_profile,
+                key=f"tunnelsettle-run-{token}-{index}",
+                pure=False,
+            )
+        )
+    index_of = {future.key: index for index, future in enumerate(futures)}
+    rows: dict[int, dict] = {}
+    cancelled = False
+    finished = as_completed(futures, loop=client.loop)
+    try:
+        while not finished.is_empty():
+            if cancel is not None and cancel.is_set():
+                cancelled = True
+                break
+            batch = finished.next_batch(block=False)
+            if not batch:
+                time.sleep(POLL_S)
+                continue
+            for future in batch:
+                index = index_of[future.key]
+                rows[index] = {**inputs[index], **_outcome(future)}
+                if progress is not None:
+                    progress(len(rows), len(futures), rows[index])
+    except KeyboardInterrupt:
+        cancelled = True
+    finally:
+        pending = [future for future in futures if not future.done()]
+        if pending:
+            client.cancel(pending, force=True)
+            _wait_idle(client, {future.key for future in pending})
+        for index, future in enumerate(futures):  # finished while the loop was stopping
+            if index not in rows and future.status in ("finished", "error"):
+                rows[index] = {**inputs[index], **_outcome(future)}
+    return rows, cancelled
+
+
+def _outcome(future) -> dict[str, Any]:
+    """Summary of a finished run, or its error message."""
+    if future.status == "finished":
+        return future.result()
+    error = future.exception()
+    return {"error": f"{type(error).__name__}: {' '.join(str(error).split())}"}
+
+
+def _executing_keys(dask_worker) -> list[str]:
+    """Keys of the tasks a worker is executing right now (run on each worker)."""
+    return [str(task.key) for task in dask_worker.state.executing]
+
+
+def _wait_idle(client, keys: set[str]) -> None:
+    """Wait until no worker still executes one of ``keys`` (a cancelled task ends its run)."""
+    deadline = time.monotonic() + CANCEL_WAIT_S
+    while time.monotonic() < deadline:
+        try:
+            executing = client.run(_executing_keys)
+        except OSError:  # a worker went away: it executes nothing any more
+            return
+        if not any(key in keys for running in executing.values() for key in running):
+            return
+        time.sleep(POLL_S)
+
+
+def _table(study: Study, rows: dict[int, dict], cancelled: bool) -> pd.DataFrame:
+    """Rows in study order; ``error`` column only if a run failed."""
+    table = pd.DataFrame.from_dict(rows, orient="index").sort_index()
+    table.index.name = "run"
+    if "error" in table:
+        table["error"] = table["error"].fillna("")
+        table = table[[c for c in table.columns if c != "error"] + ["error"]]
+    table.attrs.update(study=study.to_json(), n_runs=study.n_runs, cancelled=cancelled)
+    return table
