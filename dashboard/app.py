@@ -29,8 +29,8 @@ from holoviews.streams import Pipe
 
 from dashboard import plots
 from dashboard.controls import ParameterControl
-from dashboard.export import ITEMS_CSS, items_html, report_html
 from dashboard.longterm_view import LONGTERM_PLOTS, CalibrationPanel, law_statement
+from dashboard.report import ITEMS_CSS, items_html, report_html
 from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of, warm_up, warm_up_run
 from dashboard.study_view import StudyView
 from dashboard.whatif_view import WhatIfPanel

@@ -24,8 +24,8 @@ from panel.io.state import set_curdoc
 from dashboard import plots
 from dashboard.app import ALL_PLOTS, HIDDEN, PRIMARY, SWITCHES, Dashboard
 from dashboard.export import main as export_main
-from dashboard.export import package_version, report_html
 from dashboard.longterm_view import LONGTERM_PLOTS
+from dashboard.report import package_version, report_html
 from model import scenarios
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.pipeline import STAGES, StageCache, run
