@@ -16,7 +16,7 @@ import numpy as np
 import panel as pn
 import param
 
-from dashboard.plot_panes import PlotPanes
+from dashboard.plot_panes import PlotPanes, PlotsView
 from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
 from model.longterm import TriaxialData, fit_strain_law, parse_triaxial_csv
 from model.params import LongTerm
@@ -231,7 +231,7 @@ class CalibrationPanel(pn.viewable.Viewer):
         )
 
 
-class LongTermView(pn.viewable.Viewer):
+class LongTermView(PlotsView):
     """The long-term tab of one session: the law that produced the numbers, the long-term
     plots of the results on screen, and the calibration of the strain law.
 
@@ -262,24 +262,7 @@ class LongTermView(pn.viewable.Viewer):
     def __panel__(self) -> pn.viewable.Viewable:
         return self._layout
 
-    @property
-    def drawn(self) -> bool:
-        """True once every plot exists."""
-        return self.plots.drawn
-
-    def mark_stale(self, stages: set[str]) -> None:
-        """Dim the plots that a computing run will change."""
-        self.plots.mark_stale(stages)
-
     def show(self, results: Results, redrawn: set[str]) -> None:
         """The plots of the ``redrawn`` stages and the law's statement follow ``results``."""
         self.plots.show(results, redrawn)
         self.law_statement.object = law_statement(results)
-
-    def settle(self) -> None:
-        """Undim the plots: the run they waited for failed."""
-        self.plots.settle()
-
-    def close(self) -> None:
-        """Drop the plots of a closed session."""
-        self.plots.close()

@@ -13,14 +13,14 @@ from collections.abc import Callable
 import panel as pn
 
 from dashboard import plots
-from dashboard.plot_panes import PlotPanes, one_message
+from dashboard.plot_panes import PlotPanes, PlotsView, one_message
 from dashboard.report import ITEMS_CSS, items_html
 from dashboard.whatif_view import WhatIfPanel
 from model.params import Soil
 from model.pipeline import Results
 
 
-class PassageView(pn.viewable.Viewer):
+class PassageView(PlotsView):
     """Key numbers, soil quantities, the passage plots and the what-if panel of one session.
 
     Parameters
@@ -58,16 +58,6 @@ class PassageView(pn.viewable.Viewer):
     def __panel__(self) -> pn.viewable.Viewable:
         return self._layout
 
-    # ---- what the session's runs call (dashboard.runs.ResultsView) --------------------------
-    @property
-    def drawn(self) -> bool:
-        """True once every plot exists."""
-        return self.plots.drawn
-
-    def mark_stale(self, stages: set[str]) -> None:
-        """Dim the plots that a computing run will change."""
-        self.plots.mark_stale(stages)
-
     def show(self, results: Results, redrawn: set[str]) -> None:
         """The plots of the ``redrawn`` stages, the key numbers and the what-if table follow
         ``results``."""
@@ -76,11 +66,6 @@ class PassageView(pn.viewable.Viewer):
         self.summary.object = items_html(plots.summary_items(results), "summary")
         self.whatif.refresh()
 
-    def settle(self) -> None:
-        """Undim the plots: the run they waited for failed."""
-        self.plots.settle()
-
-    # ---- what the dashboard calls -----------------------------------------------------------
     def update_soil_summary(self, soil: Soil) -> None:
         """Derived soil quantities of ``soil`` (they follow the inputs, before any run)."""
         self.soil_summary.object = items_html(plots.soil_items(soil), "soil")
@@ -92,7 +77,7 @@ class PassageView(pn.viewable.Viewer):
 
     def close(self) -> None:
         """Drop the plots and results of a closed session."""
-        self.plots.close()
+        super().close()
         self._results = None
 
     def _draw_arguments(self, spec: plots.PlotSpec) -> dict:

@@ -3,8 +3,9 @@
 Each plot (a :class:`~dashboard.plots.PlotSpec`) sits in a pane inside a box of its own. Its
 first results create a DynamicMap on a stream; later ones are sent through the stream and
 update the Bokeh figure in place, which is far cheaper on both ends than replacing the figure.
-While a run that will change a plot computes, the plot's box is dimmed. :func:`one_message`
-sends a method's page changes to the browser as one message.
+While a run that will change a plot computes, the plot's box is dimmed. :class:`PlotsView` is
+the base of the views whose plots show a run; :func:`one_message` sends a method's page changes
+to the browser as one message.
 """
 
 from __future__ import annotations
@@ -173,3 +174,27 @@ class PlotPanes:
             return
         pane.loading = False
         cell.styles = STALE_PLOT_STYLES if stale else PLOT_STYLES
+
+
+class PlotsView(pn.viewable.Viewer):
+    """Base of a view whose :attr:`plots` (a :class:`PlotPanes`, set by the subclass) show the
+    session's runs: what :class:`~dashboard.runs.SessionRuns` asks of a view's plots."""
+
+    plots: PlotPanes
+
+    @property
+    def drawn(self) -> bool:
+        """True once every plot exists."""
+        return self.plots.drawn
+
+    def mark_stale(self, stages: set[str]) -> None:
+        """Dim the plots that a computing run will change."""
+        self.plots.mark_stale(stages)
+
+    def settle(self) -> None:
+        """Undim the plots: the run they waited for failed."""
+        self.plots.settle()
+
+    def close(self) -> None:
+        """Drop the plots of a closed session."""
+        self.plots.close()

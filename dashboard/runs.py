@@ -68,7 +68,8 @@ Outcome = tuple[Results, FEResult | None]
 
 class ResultsView(Protocol):
     """What shows a run's results (:class:`~dashboard.passage_view.PassageView`,
-    :class:`~dashboard.longterm_view.LongTermView`)."""
+    :class:`~dashboard.longterm_view.LongTermView`; all but ``show`` from
+    :class:`~dashboard.plot_panes.PlotsView`)."""
 
     @property
     def drawn(self) -> bool:
