@@ -1,4 +1,5 @@
-"""Long-term settlement view: pure plot functions Results → HoloViews, and a calibration panel.
+"""The "Long-term settlement" view: pure plot functions Results → HoloViews, a calibration
+panel, and :class:`LongTermView`, the tab that shows them with the law's statement.
 
 The plots read ``Results.longterm`` (docs/model.md §10): settlement at the invert against years of
 service (log axis), the permanent strain and the stress ratio q_d/σ_s against depth with the
@@ -16,6 +17,7 @@ import numpy as np
 import panel as pn
 import param
 
+from dashboard.plot_panes import PlotPanes, PlotsView
 from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
 from model.longterm.calibration import TriaxialData, fit_strain_law, parse_triaxial_csv
 from model.params import LongTerm
@@ -228,3 +230,40 @@ class CalibrationPanel(pn.viewable.Viewer):
             self.apply_button,
             self.plot,
         )
+
+
+class LongTermView(PlotsView):
+    """The long-term tab of one session: the law that produced the numbers, the long-term
+    plots of the results on screen, and the calibration of the strain law.
+
+    Parameters
+    ----------
+    longterm : LongTerm
+        The session's long-term parameters; the calibration writes its fit into them.
+    """
+
+    def __init__(self, longterm: LongTerm) -> None:
+        super().__init__()
+        self.law_statement = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.calibration = CalibrationPanel(longterm=longterm)
+        self.plots = PlotPanes(LONGTERM_PLOTS)
+        self._layout = pn.Column(
+            self.law_statement,
+            self.plots.flexbox(),
+            pn.Card(
+                self.calibration,
+                title="Calibrate the strain law",
+                collapsed=True,
+                sizing_mode="stretch_width",
+            ),
+            sizing_mode="stretch_width",
+            name="Long-term settlement",
+        )
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        return self._layout
+
+    def show(self, results: Results, redrawn: set[str]) -> None:
+        """The plots of the ``redrawn`` stages and the law's statement follow ``results``."""
+        self.plots.show(results, redrawn)
+        self.law_statement.object = law_statement(results)

@@ -18,7 +18,6 @@ from functools import partial
 import panel as pn
 import param
 
-from dashboard.export import COMPARISON_CSS, comparison_html, session_report_html
 from dashboard.whatif import (
     CURRENT_LABEL,
     MAX_PINNED,
@@ -28,6 +27,7 @@ from dashboard.whatif import (
     load_session,
     save_session,
 )
+from dashboard.whatif_report import COMPARISON_CSS, comparison_html, session_report_html
 from model.params import Scenario
 from model.pipeline import Results, SimulationError, run
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from dashboard.app import STALE_PLOT_STYLES
+from dashboard.plot_panes import STALE_PLOT_STYLES
 from model.pipeline import STAGES
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -28,8 +28,8 @@ from test_browser import (
     wait_for_renders,
 )
 
-from dashboard.export import comparison_html
 from dashboard.whatif import CURRENT_LABEL, WhatIfSession
+from dashboard.whatif_report import comparison_html
 from model.params import Scenario
 from model.pipeline import StageCache, run
 

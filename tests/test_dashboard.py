@@ -22,15 +22,17 @@ from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
-from dashboard.app import ALL_PLOTS, HIDDEN, PRIMARY, SWITCHES, Dashboard
+from dashboard.app import Dashboard
 from dashboard.export import main as export_main
-from dashboard.export import package_version, report_html
+from dashboard.inputs import HIDDEN, PRIMARY, SWITCHES
 from dashboard.longterm_view import LONGTERM_PLOTS
+from dashboard.report import package_version, report_html
 from model import scenarios
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.pipeline import STAGES, StageCache, run
 
 MM = 1e3
+ALL_PLOTS = (*plots.PLOTS, *LONGTERM_PLOTS)
 
 
 @pytest.fixture(scope="module")
@@ -56,9 +58,29 @@ def _curves(element):
     return {layer.label: layer for layer in layers}
 
 
+def _plot_views(board):
+    """The page's plot panes: the passage plots, then the long-term ones."""
+    return (board.passage.plots, board.longterm.plots)
+
+
+def _panes(board):
+    """Every plot pane of the page, by plot key."""
+    return {key: pane for view in _plot_views(board) for key, pane in view.panes.items()}
+
+
+def _streams(board):
+    """The stream of every plot drawn so far, by plot key."""
+    return {key: stream for view in _plot_views(board) for key, stream in view.streams.items()}
+
+
+def _is_stale(board, key):
+    """True while the plot ``key`` waits for a run that will change it."""
+    return next(view for view in _plot_views(board) if key in view.panes).is_stale(key)
+
+
 def _shown(board, key):
     """The element a dashboard plot shows now (its DynamicMap evaluated on its stream)."""
-    return board.plot_panes[key].object[()]
+    return _panes(board)[key].object[()]
 
 
 def _pane_data(board, key):
@@ -153,7 +175,7 @@ def test_summary_items_are_the_summary_in_display_units(results):
     assert soil["soil_shear_modulus"].unit == "MPa"
 
 
-# ---- app.py ---------------------------------------------------------------------------------
+# ---- app.py and its parts ------------------------------------------------------------------------
 def test_app_builds_with_a_control_for_every_parameter(dashboard):
     page = dashboard.template()
     assert isinstance(page, pn.template.BootstrapTemplate)
@@ -163,17 +185,17 @@ def test_app_builds_with_a_control_for_every_parameter(dashboard):
         for name in getattr(dashboard.scenario, section).param
         if name != "name"
     }
-    assert set(dashboard.controls) == expected - HIDDEN
-    assert set(PRIMARY) <= set(dashboard.controls)
+    assert set(dashboard.inputs.controls) == expected - HIDDEN
+    assert set(PRIMARY) <= set(dashboard.inputs.controls)
     pn.Row(dashboard).get_root()  # the whole layout renders to Bokeh models
 
 
 def test_sidebar_has_the_main_inputs_up_front_and_the_rest_in_groups(dashboard):
     """Groups start collapsed and empty (fast page load) and fill on first opening."""
     sidebar = dashboard.sidebar()
-    up_front = [item for item in sidebar if item in dashboard.controls.values()]
-    assert up_front == [dashboard.controls[p] for p in (*SWITCHES, *PRIMARY)]
-    assert dashboard.preset_select in sidebar and dashboard.train_type in sidebar
+    up_front = [item for item in sidebar if item in dashboard.inputs.controls.values()]
+    assert up_front == [dashboard.inputs.controls[p] for p in (*SWITCHES, *PRIMARY)]
+    assert dashboard.inputs.preset_select in sidebar and dashboard.inputs.train_type in sidebar
     cards = [item for item in sidebar if isinstance(item, pn.Card)]
     grouped = {}
     for card in cards[:-1]:  # the last card holds the scenario file controls
@@ -182,18 +204,19 @@ def test_sidebar_has_the_main_inputs_up_front_and_the_rest_in_groups(dashboard):
         grouped[card.title] = list(card.objects)
     in_groups = {
         path
-        for path, control in dashboard.controls.items()
+        for path, control in dashboard.inputs.controls.items()
         if any(control.__panel__() in members for members in grouped.values())
     }
-    assert in_groups == set(dashboard.controls) - set(PRIMARY) - set(SWITCHES)
-    assert dashboard.controls["soil.poisson_ratio"].__panel__() in grouped["Soil"]
-    assert dashboard.controls["longterm.years"].__panel__() in grouped["Long-term settlement"]
+    assert in_groups == set(dashboard.inputs.controls) - set(PRIMARY) - set(SWITCHES)
+    controls = dashboard.inputs.controls
+    assert controls["soil.poisson_ratio"].__panel__() in grouped["Soil"]
+    assert controls["longterm.years"].__panel__() in grouped["Long-term settlement"]
 
 
 def test_controls_take_unit_label_range_value_and_tooltip_from_the_params(dashboard):
     """No default or range is repeated in the app: all come from model.params, scaled to the
     display unit (exact up to the 12 significant digits the conversion keeps)."""
-    for path, control in dashboard.controls.items():
+    for path, control in dashboard.inputs.controls.items():
         p = parameter_of(path)
         unit, factor = display_unit(path)
         assert control.label == display_label(path), path
@@ -205,106 +228,108 @@ def test_controls_take_unit_label_range_value_and_tooltip_from_the_params(dashbo
             assert control.slider.start == pytest.approx(min(low * factor, shown), rel=1e-12)
             assert control.slider.end == pytest.approx(max(high * factor, shown), rel=1e-12)
             assert control.slider.value == pytest.approx(shown, rel=1e-12), path
-    soil = dashboard.controls["soil.youngs_modulus"]
+    soil = dashboard.inputs.controls["soil.youngs_modulus"]
     assert soil.label == "Soil Young's modulus (MPa)" and soil.text.value == "6"
-    assert dashboard.controls["track.rail_E"].text.value == "205.9"  # GPa
-    assert dashboard.controls["track.fastener_stiffness"].text.value == "80"  # MN/m
+    assert dashboard.inputs.controls["track.rail_E"].text.value == "205.9"  # GPa
+    assert dashboard.inputs.controls["track.fastener_stiffness"].text.value == "80"  # MN/m
 
 
 def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
-    for key, pane in dashboard.plot_panes.items():
-        assert pane.object is not None and not dashboard.is_stale(key), key
+    for key, pane in _panes(dashboard).items():
+        assert pane.object is not None and not _is_stale(dashboard, key), key
         x, y = _pane_data(dashboard, key)
         assert x.size > 10 and np.all(np.isfinite(y)), key
-    assert 'data-key="peak_disp_invert"' in dashboard.summary.object
-    assert dashboard.render_counts == dict.fromkeys(STAGES, 1)
+    assert 'data-key="peak_disp_invert"' in dashboard.passage.summary.object
+    assert dashboard.runs.render_counts == dict.fromkeys(STAGES, 1)
     assert dashboard.report_button.disabled is False
 
 
 def test_speed_change_updates_every_plot(dashboard):
-    before = {key: np.concatenate(_pane_data(dashboard, key)) for key in dashboard.plot_panes}
-    dashboard.controls["train.speed_kmh"].slide(90.0)
+    before = {key: np.concatenate(_pane_data(dashboard, key)) for key in _panes(dashboard)}
+    dashboard.inputs.controls["train.speed_kmh"].slide(90.0)
     assert dashboard.scenario.train.speed_kmh == 90.0
-    assert dashboard.results.scenario.train.speed_kmh == 90.0
-    for key in dashboard.plot_panes:
+    assert dashboard.runs.results.scenario.train.speed_kmh == 90.0
+    for key in _panes(dashboard):
         after = np.concatenate(_pane_data(dashboard, key))
         assert after.shape != before[key].shape or not np.array_equal(after, before[key]), key
-    assert dashboard.render_counts == dict.fromkeys(STAGES, 2)
+    assert dashboard.runs.render_counts == dict.fromkeys(STAGES, 2)
 
 
 def test_slider_values_are_rounded_to_the_slider_step(dashboard):
     """A dragged position with binary noise (55.99999999999999) is set and shown as 56."""
-    control = dashboard.controls["train.speed_kmh"]
+    control = dashboard.inputs.controls["train.speed_kmh"]
     control.slide(95.99999999999999)
     assert dashboard.scenario.train.speed_kmh == 96.0
     assert control.text.value == "96"
 
 
 def test_soil_change_in_display_units_redraws_only_the_soil_plots(dashboard):
-    old = dashboard.results
-    panes = {key: pane.object for key, pane in dashboard.plot_panes.items()}
-    summary_before = dashboard.summary.object
-    soil_before = dashboard.soil_summary.object
-    dashboard.controls["soil.youngs_modulus"].enter("12 MPa")
+    old = dashboard.runs.results
+    panes = {key: pane.object for key, pane in _panes(dashboard).items()}
+    summary_before = dashboard.passage.summary.object
+    soil_before = dashboard.passage.soil_summary.object
+    dashboard.inputs.controls["soil.youngs_modulus"].enter("12 MPa")
     assert dashboard.scenario.soil.youngs_modulus == 12e6  # SI inside
-    assert set(dashboard.results.cached_stages) == {"vehicle_track", "load"}
+    assert set(dashboard.runs.results.cached_stages) == {"vehicle_track", "load"}
     for spec in plots.PLOTS:
-        assert dashboard.plot_panes[spec.key].object is panes[spec.key]  # updated in place
-        sent = dashboard.plot_streams[spec.key].data
-        assert (sent is dashboard.results) == (spec.stage == "soil"), spec.key
+        assert _panes(dashboard)[spec.key].object is panes[spec.key]  # updated in place
+        sent = _streams(dashboard)[spec.key].data
+        assert (sent is dashboard.runs.results) == (spec.stage == "soil"), spec.key
         assert (sent is old) == (spec.stage != "soil"), spec.key
-    assert dashboard.render_counts == {
+    assert dashboard.runs.render_counts == {
         "vehicle_track": 1,
         "load": 1,
         **dict.fromkeys(STAGES[2:], 2),
     }
-    assert dashboard.summary.object != summary_before
-    assert dashboard.soil_summary.object != soil_before
+    assert dashboard.passage.summary.object != summary_before
+    assert dashboard.passage.soil_summary.object != soil_before
     # doubling E at fixed ν doubles μ (2 × 2.3077 MPa from E = 6 MPa, ν = 0.3)
-    assert "4.615 MPa" in dashboard.soil_summary.object
-    assert 'data-renders="2"' in dashboard.status.object and "cached" in dashboard.status.object
-    assert json.loads(dashboard._scenario_file().getvalue())["soil"]["youngs_modulus"] == 12e6
+    assert "4.615 MPa" in dashboard.passage.soil_summary.object
+    status = dashboard.runs.status.object
+    assert 'data-renders="2"' in status and "cached" in status
+    saved = json.loads(dashboard.inputs._scenario_file().getvalue())
+    assert saved["soil"]["youngs_modulus"] == 12e6
 
 
 def test_a_run_marks_only_the_plots_it_will_change_as_stale(dashboard):
     scenario = dashboard.scenario.copy()
     scenario.soil.density = 1900.0
-    dashboard._start(scenario)
-    assert dashboard.progress_shown
+    dashboard.runs._start(scenario)
+    assert dashboard.runs.progress_shown
     for spec in plots.PLOTS:
-        assert dashboard.is_stale(spec.key) == (spec.stage == "soil"), spec.key
-    dashboard._note_progress("soil", 0.5)
-    dashboard._show_progress()
-    assert dashboard.progress.value == round(100 * 2.5 / len(STAGES))  # 2 stages done + 0.5
-    assert "Computing soil… 50%" in dashboard.status.object
+        assert _is_stale(dashboard, spec.key) == (spec.stage == "soil"), spec.key
+    dashboard.runs._note_progress("soil", 0.5)
+    dashboard.runs._show_progress()
+    assert dashboard.runs.progress.value == round(100 * 2.5 / len(STAGES))  # 2 stages done + 0.5
+    assert "Computing soil… 50%" in dashboard.runs.status.object
 
 
 def test_edits_during_a_run_give_one_more_run_with_the_newest_value(dashboard, monkeypatch):
     """Three edits while a run computes give exactly one further run, with the last value."""
     speeds = []
-    compute = dashboard.runs._compute
+    compute = dashboard.runs.latest._compute
 
     def slow_user_compute(scenario):
         speeds.append(scenario.train.speed_kmh)
         if len(speeds) == 1:
             for speed in (91.0, 92.0, 93.0):
-                dashboard.controls["train.speed_kmh"].enter(str(speed))
+                dashboard.inputs.controls["train.speed_kmh"].enter(str(speed))
         return compute(scenario)
 
-    monkeypatch.setattr(dashboard.runs, "_compute", slow_user_compute)
-    dashboard.controls["train.speed_kmh"].enter("90")
+    monkeypatch.setattr(dashboard.runs.latest, "_compute", slow_user_compute)
+    dashboard.inputs.controls["train.speed_kmh"].enter("90")
     assert speeds == [90.0, 93.0]
-    assert dashboard.results.scenario.train.speed_kmh == 93.0
-    assert not dashboard.runs.busy and not dashboard.progress_shown
+    assert dashboard.runs.results.scenario.train.speed_kmh == 93.0
+    assert not dashboard.runs.latest.busy and not dashboard.runs.progress_shown
 
 
 @pytest.mark.parametrize("text", ["-5", "0", "abc", "6 kPa", ""])
 def test_refused_text_gives_a_message_and_changes_nothing(dashboard, text):
-    control = dashboard.controls["soil.youngs_modulus"]
-    results_before = dashboard.results
+    control = dashboard.inputs.controls["soil.youngs_modulus"]
+    results_before = dashboard.runs.results
     slider_range = (control.slider.start, control.slider.end)
     control.enter(text)
-    alert = dashboard.error_alert
+    alert = dashboard.messages.error_alert
     assert alert.visible
     message = alert.object.replace("\\", "")
     assert "soil.youngs_modulus" in message and "Traceback" not in message
@@ -313,78 +338,78 @@ def test_refused_text_gives_a_message_and_changes_nothing(dashboard, text):
     assert dashboard.scenario.soil.youngs_modulus == 6e6
     assert control.text.value == "6"  # the box shows the value still in force
     assert (control.slider.start, control.slider.end) == slider_range
-    assert dashboard.results is results_before
+    assert dashboard.runs.results is results_before
     control.enter("8")  # a good value clears the message
     assert not alert.visible
 
 
 def test_accepted_value_outside_the_soft_bounds_widens_the_slider(dashboard):
-    control = dashboard.controls["train.speed_kmh"]
+    control = dashboard.inputs.controls["train.speed_kmh"]
     control.enter("180")
     assert dashboard.scenario.train.speed_kmh == 180.0
     assert control.slider.end == 180.0 and control.slider.value == 180.0
 
 
 def test_inconsistent_inputs_are_reported_not_raised(dashboard):
-    dashboard.controls["irregularity.wavelength_min"].enter("60")
-    assert dashboard.error_alert.visible
-    text = dashboard.error_alert.object.replace("\\", "")
+    dashboard.inputs.controls["irregularity.wavelength_min"].enter("60")
+    assert dashboard.messages.error_alert.visible
+    text = dashboard.messages.error_alert.object.replace("\\", "")
     assert "Inconsistent inputs" in text and "wavelength_max" in text
-    assert not any(dashboard.is_stale(key) for key in dashboard.plot_panes)
+    assert not any(_is_stale(dashboard, key) for key in _panes(dashboard))
 
 
 def test_optional_parameter_text_box_accepts_automatic(dashboard):
-    control = dashboard.controls["numerics.n_rail_modes"]
+    control = dashboard.inputs.controls["numerics.n_rail_modes"]
     assert control.slider is None and control.text.value == ""
     control.enter("abc")
-    assert "not a whole number" in dashboard.error_alert.object
+    assert "not a whole number" in dashboard.messages.error_alert.object
     control.enter(str(dashboard.scenario.rail_modes))
     assert dashboard.scenario.numerics.n_rail_modes == dashboard.scenario.rail_modes
-    assert not dashboard.error_alert.visible
+    assert not dashboard.messages.error_alert.visible
     control.enter("")
     assert dashboard.scenario.numerics.n_rail_modes is None
 
 
 def test_train_type_selector_applies_the_standard_geometry(dashboard):
-    assert dashboard.train_type.value == "Type A"
-    dashboard.train_type.value = "Type B"
+    assert dashboard.inputs.train_type.value == "Type A"
+    dashboard.inputs.train_type.value = "Type B"
     assert dashboard.scenario.train.car_length == 19.0  # Train.type_b, docs/model.md §1
-    assert dashboard.controls["train.car_length"].text.value == "19"
-    dashboard.controls["train.car_length"].enter("20")
-    assert dashboard.train_type.value == scenarios.CUSTOM
+    assert dashboard.inputs.controls["train.car_length"].text.value == "19"
+    dashboard.inputs.controls["train.car_length"].enter("20")
+    assert dashboard.inputs.train_type.value == scenarios.CUSTOM
 
 
 def test_preset_label_says_custom_once_an_input_is_edited(cache, cheap_scenario):
     board = Dashboard(scenario=Scenario.preset("single_bogie"), preset="single_bogie", cache=cache)
     board.refresh = lambda: None  # runs are not needed here
-    assert board.preset_select.value == "single_bogie"
-    board.controls["soil.density"].enter("1900")
-    assert board.preset_select.value == scenarios.CUSTOM
-    board.controls["soil.density"].enter("1800")  # back to the preset's inputs
-    assert board.preset_select.value == "single_bogie"
+    assert board.inputs.preset_select.value == "single_bogie"
+    board.inputs.controls["soil.density"].enter("1900")
+    assert board.inputs.preset_select.value == scenarios.CUSTOM
+    board.inputs.controls["soil.density"].enter("1800")  # back to the preset's inputs
+    assert board.inputs.preset_select.value == "single_bogie"
 
 
 def test_preset_selector_replaces_the_scenario_and_the_controls(cache, cheap_scenario):
     board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
     board.refresh = lambda: None  # the paper case is a full-train run; not needed here
-    board.preset_select.value = "paper_soil_lame"
+    board.inputs.preset_select.value = "paper_soil_lame"
     assert board.scenario.soil.youngs_modulus == pytest.approx(550.07e6, rel=1e-4)
-    control = board.controls["soil.youngs_modulus"]
+    control = board.inputs.controls["soil.youngs_modulus"]
     assert control.slider.value == pytest.approx(550.07, rel=1e-4)  # MPa
     assert control.slider.end >= control.slider.value  # widened to an out-of-range preset value
-    assert board.controls["train.single_bogie"].widget.value is False
-    assert board.preset_select.value == "paper_soil_lame"
+    assert board.inputs.controls["train.single_bogie"].widget.value is False
+    assert board.inputs.preset_select.value == "paper_soil_lame"
 
 
 def test_scenario_save_and_load_round_trip(dashboard):
-    dashboard.controls["train.speed_kmh"].enter("95")
-    saved = dashboard._scenario_file().getvalue()
+    dashboard.inputs.controls["train.speed_kmh"].enter("95")
+    saved = dashboard.inputs._scenario_file().getvalue()
     assert Scenario.from_json(saved).train.speed_kmh == 95.0
-    dashboard.controls["train.speed_kmh"].enter("100")
-    dashboard.load_input.param.update(filename="s.json", value=saved.encode())
+    dashboard.inputs.controls["train.speed_kmh"].enter("100")
+    dashboard.inputs.load_input.param.update(filename="s.json", value=saved.encode())
     assert dashboard.scenario.train.speed_kmh == 95.0
-    assert dashboard.controls["train.speed_kmh"].text.value == "95"
-    assert dashboard.results.scenario.train.speed_kmh == 95.0
+    assert dashboard.inputs.controls["train.speed_kmh"].text.value == "95"
+    assert dashboard.runs.results.scenario.train.speed_kmh == 95.0
 
 
 @pytest.mark.parametrize(
@@ -398,9 +423,9 @@ def test_scenario_save_and_load_round_trip(dashboard):
 )
 def test_a_bad_scenario_file_gives_a_clear_message(dashboard, content, message):
     before = dashboard.scenario.to_json()
-    dashboard.load_input.param.update(filename="bad.json", value=content)
-    assert dashboard.error_alert.visible
-    assert message in dashboard.error_alert.object.replace("\\", "")
+    dashboard.inputs.load_input.param.update(filename="bad.json", value=content)
+    assert dashboard.messages.error_alert.visible
+    assert message in dashboard.messages.error_alert.object.replace("\\", "")
     assert dashboard.scenario.to_json() == before
 
 
@@ -410,15 +435,15 @@ def test_query_arguments_choose_preset_and_overrides(cache):
         cache=cache,
     )
     assert board.scenario.train.single_bogie and board.scenario.train.speed_kmh == 70.0
-    assert board.controls["train.speed_kmh"].text.value == "70"
-    assert board.preset_select.value == scenarios.CUSTOM  # the preset with edits
-    assert not board.error_alert.visible
+    assert board.inputs.controls["train.speed_kmh"].text.value == "70"
+    assert board.inputs.preset_select.value == scenarios.CUSTOM  # the preset with edits
+    assert not board.messages.error_alert.visible
     plain = Dashboard.from_query({"preset": [b"single_bogie"]}, cache=cache)
-    assert plain.preset_select.value == "single_bogie"
+    assert plain.inputs.preset_select.value == "single_bogie"
     bad = Dashboard.from_query({"preset": [b"nope"], "soil.youngs_modulus": [b"-3"]}, cache=cache)
-    text = bad.error_alert.object.replace("\\", "")
+    text = bad.messages.error_alert.object.replace("\\", "")
     assert "unknown preset 'nope'" in text and "youngs_modulus" in text
-    assert bad.preset_select.value == "paper"
+    assert bad.inputs.preset_select.value == "paper"
 
 
 def test_views_are_tabs_and_an_added_view_becomes_one(dashboard):
@@ -433,18 +458,18 @@ def test_views_are_tabs_and_an_added_view_becomes_one(dashboard):
 
 def test_long_term_view_shows_the_law_and_its_plots(dashboard):
     """The long-term tab states the law that produced the numbers and draws each plot."""
-    assert "Li & Selig" in dashboard.law_statement.object
+    assert "Li & Selig" in dashboard.longterm.law_statement.object
     for spec in LONGTERM_PLOTS:
-        assert dashboard.plot_panes[spec.key].object is not None, spec.key
+        assert _panes(dashboard)[spec.key].object is not None, spec.key
 
 
 def test_depth_plot_draws_the_other_tunnel_model_faint(dashboard):
     """Issue 11: the depth plot shows the chosen model's profile and, dashed, the other one's,
     each with its own numbers."""
-    assert dashboard.other_model is not None
-    assert dashboard.other_model.scenario.tunnel.model == "2.5d"
+    assert dashboard.runs.other_model is not None
+    assert dashboard.runs.other_model.scenario.tunnel.model == "2.5d"
     curves = _curves(_shown(dashboard, "depth_profile"))
-    for results in (dashboard.results, dashboard.other_model):
+    for results in (dashboard.runs.results, dashboard.runs.other_model):
         name = plots.MODEL_NAMES[results.scenario.tunnel.model]
         np.testing.assert_allclose(
             curves[name].dimension_values(0), results.soil.peak_disp_m * 1e3, rtol=1e-12
@@ -454,27 +479,27 @@ def test_depth_plot_draws_the_other_tunnel_model_faint(dashboard):
 def test_the_other_model_is_computed_after_the_results_are_shown(dashboard, monkeypatch):
     """The comparison run does not delay the chosen model's plots: it starts once they show
     the new results, and its curve then follows the new inputs."""
-    compute = dashboard.companion_runs._compute
+    compute = dashboard.runs.companion._compute
     shown_when_called = []
 
     def watching_compute(other):
-        shown_when_called.append(dashboard.results.scenario.soil.youngs_modulus)
-        assert dashboard.other_model is None  # the old scenario's curve is gone meanwhile
+        shown_when_called.append(dashboard.runs.results.scenario.soil.youngs_modulus)
+        assert dashboard.runs.other_model is None  # the old scenario's curve is gone meanwhile
         return compute(other)
 
-    monkeypatch.setattr(dashboard.companion_runs, "_compute", watching_compute)
-    dashboard.controls["soil.youngs_modulus"].enter("9")  # MPa
+    monkeypatch.setattr(dashboard.runs.companion, "_compute", watching_compute)
+    dashboard.inputs.controls["soil.youngs_modulus"].enter("9")  # MPa
     assert shown_when_called == [9e6]
-    assert dashboard.other_model.scenario.soil.youngs_modulus == 9e6
-    assert not dashboard.companion_runs.busy
+    assert dashboard.runs.other_model.scenario.soil.youngs_modulus == 9e6
+    assert not dashboard.runs.companion.busy
 
 
 def test_a_comparison_run_of_older_inputs_is_not_drawn(dashboard):
     """A comparison result that no longer matches the inputs on screen is dropped."""
-    shown = dashboard.other_model
-    stale = dashboard.results  # a Results of another scenario than the expected comparison
-    dashboard._finish_companion(stale.scenario, stale)
-    assert dashboard.other_model is shown
+    shown = dashboard.runs.other_model
+    stale = dashboard.runs.results  # a Results of another scenario than the expected comparison
+    dashboard.runs._finish_companion(stale.scenario, stale)
+    assert dashboard.runs.other_model is shown
 
 
 def test_a_page_of_cached_inputs_is_drawn_before_it_is_sent(cache, cheap_scenario):
@@ -482,25 +507,25 @@ def test_a_page_of_cached_inputs_is_drawn_before_it_is_sent(cache, cheap_scenari
     pool); others, or kernels still compiling, wait for the page's own run."""
     run(cheap_scenario(), cache=cache)
     board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
-    assert board.show_cached_results()
-    assert set(board.plot_streams) == {spec.key for spec in ALL_PLOTS}
-    assert board.results.scenario.to_dict() == cheap_scenario().to_dict()
-    assert not board.runs.busy and not any(board.is_stale(key) for key in board.plot_panes)
-    counts, hits = dict(board.render_counts), dict(cache.hits)
-    board.compute_waiting()  # what the page does once loaded: only the comparison curve
-    assert board.comparison_state == "shown" and board.render_counts == counts
+    assert board.runs.show_cached()
+    assert set(_streams(board)) == {spec.key for spec in ALL_PLOTS}
+    assert board.runs.results.scenario.to_dict() == cheap_scenario().to_dict()
+    assert not board.runs.latest.busy and not any(_is_stale(board, key) for key in _panes(board))
+    counts, hits = dict(board.runs.render_counts), dict(cache.hits)
+    board.runs.compute_waiting()  # what the page does once loaded: only the comparison curve
+    assert board.runs.comparison_state == "shown" and board.runs.render_counts == counts
     assert cache.hits["vehicle_track"] == hits["vehicle_track"] + 1  # the other model's run
 
     other = cheap_scenario()
     other.train.speed_kmh = 77.0
     fresh = Dashboard(scenario=other, preset="single_bogie", cache=cache)
-    assert not fresh.show_cached_results() and fresh.results is None
+    assert not fresh.runs.show_cached() and fresh.runs.results is None
 
     compiling = Future()  # the server's warm-up run, not finished
     waiting = Dashboard(
         scenario=cheap_scenario(), preset="single_bogie", cache=cache, warm=compiling
     )
-    assert not waiting.show_cached_results() and waiting.results is None
+    assert not waiting.runs.show_cached() and waiting.runs.results is None
 
 
 def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeypatch):
@@ -520,14 +545,14 @@ def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeyp
 
         monkeypatch.setattr(manager, "recompute", counted)
         board.scenario.train.speed_kmh += 5.0  # a run that redraws every plot
-    assert board.results.scenario.train.speed_kmh == cheap_scenario().train.speed_kmh + 5.0
+    assert board.runs.results.scenario.train.speed_kmh == cheap_scenario().train.speed_kmh + 5.0
     assert len(indexings) <= 2  # the results, and the other model's curve after them
 
 
 def test_closing_a_session_drops_its_results(dashboard):
     dashboard.close()
-    assert dashboard.results is None and not dashboard.plot_streams
-    assert all(pane.object is None for pane in dashboard.plot_panes.values())
+    assert dashboard.runs.results is None and not _streams(dashboard)
+    assert all(pane.object is None for pane in _panes(dashboard).values())
 
 
 # ---- export.py ------------------------------------------------------------------------------
@@ -591,7 +616,7 @@ def test_report_download_button_serves_the_report(dashboard):
     session_doc = Document()
     with set_curdoc(session_doc), set_resource_mode("server"):
         dashboard.template().server_doc(session_doc)
-        data = dashboard._report_file()
+        data = dashboard.report_button.callback()
     assert isinstance(data, io.BytesIO)
     text = data.getvalue().decode("utf-8")
     assert text.startswith("<!DOCTYPE html>")
@@ -639,7 +664,7 @@ def test_pinning_works_once_the_inputs_are_custom(dashboard):
     preset the inputs started from (a browser session showed a KeyError for 'custom')."""
     dashboard.scenario.soil.youngs_modulus = 8e6
     dashboard.refresh()
-    assert dashboard.preset_select.value == scenarios.CUSTOM
+    assert dashboard.inputs.preset_select.value == scenarios.CUSTOM
     dashboard.whatif.pin_button.clicks += 1
     assert len(dashboard.whatif.session.runs) == 1
     assert "8 MPa" in dashboard.whatif.session.runs[0].name
@@ -657,6 +682,6 @@ def test_depth_plot_draws_a_stored_fe_result(results):
 def test_a_whole_number_from_the_slider_is_in_display_units(dashboard):
     """Bokeh sends a slider position of 16 (MPa) as the int 16: it must become 16e6 Pa, not
     16 Pa (which the soil bounds refuse; before those bounds it was silently taken as 16 Pa)."""
-    control = dashboard.controls["soil.youngs_modulus"]
+    control = dashboard.inputs.controls["soil.youngs_modulus"]
     control.slide(16)
     assert dashboard.scenario.soil.youngs_modulus == 16e6

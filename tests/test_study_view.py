@@ -1,5 +1,5 @@
 """The Study view without a browser: choices from the params, grids, plots, start/cancel logic;
-the study report (dashboard/export.py) and its command line.
+the study report (dashboard/study_report.py) and its command line (dashboard/export.py).
 
 The view's own logic is tested with ``run_study`` replaced by the same study run in this
 process (no cluster; the Dask path itself is covered by tests/test_study.py). Plots are checked
@@ -21,18 +21,11 @@ from test_dashboard import EXTERNAL_TAG, _markup_texts
 
 from dashboard import study_view
 from dashboard.export import main as export_main
-from dashboard.export import study_band_table, study_report_html
-from dashboard.study_view import (
-    NONE,
-    StudyView,
-    band_plot,
-    grid_values,
-    heat_map,
-    study_parameters,
-    study_plots,
-)
+from dashboard.study_plots import RESULTS, band_plot, heat_map, study_plots
+from dashboard.study_report import study_band_table, study_report_html
+from dashboard.study_view import NONE, StudyView, grid_values, study_parameters
 from model.params import Scenario
-from model.study import execution as study_module
+from model.study import execution
 from model.study.definition import define_study
 from model.study.execution import run_summary
 from model.study.tables import aggregate, save_study
@@ -53,7 +46,7 @@ def _in_process_study(
     finally:
         numba.set_num_threads(threads)  # run_summary limits the calling thread to one
     cancelled = len(rows) < study.n_runs
-    return study_module._table(study, rows, cancelled)
+    return execution._table(study, rows, cancelled)
 
 
 @pytest.fixture
@@ -197,7 +190,7 @@ def test_long_term_settlement_is_drawn_when_the_key_exists():
         }
     )
     titles = [plot.opts.get().kwargs.get("title") for plot in study_plots(table)]
-    assert titles == [study_view.RESULTS[k] for k in study_view.RESULTS]
+    assert titles == [RESULTS[k] for k in RESULTS]
     plot = band_plot(aggregate(table), "train.speed_kmh", "longterm_settlement_m")
     np.testing.assert_allclose(plot.values()[1].dimension_values(1), [15.0, 40.0], rtol=1e-12)
     assert isinstance(

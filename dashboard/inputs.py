@@ -1,0 +1,247 @@
+"""The sidebar's inputs of one session: preset, tunnel–soil model switch, train type, a control
+per parameter (the main ones up front, the rest in collapsible groups) and the scenario file.
+
+They edit the session's :class:`~model.params.Scenario` in place; controls come from the
+parameters (:mod:`dashboard.controls`), presets and train types from :mod:`model.scenarios`.
+A refused value or a bad file is reported in the page's messages (:mod:`dashboard.messages`).
+"""
+
+from __future__ import annotations
+
+import html
+import io
+from collections.abc import Callable
+
+import panel as pn
+import param
+
+from dashboard.controls import ParameterControl
+from dashboard.messages import Messages
+from model import scenarios
+from model.params import SECTIONS, Scenario
+
+PRIMARY = ("train.speed_kmh", "soil.youngs_modulus", "track.fastener_stiffness")
+"""Main inputs, shown up front; every other parameter sits in its section's collapsible group."""
+
+SWITCHES = ("tunnel.model",)
+"""Model switches shown up front with the presets."""
+
+GROUP_TITLES = {
+    "train": "Train",
+    "irregularity": "Track irregularity",
+    "track": "Track",
+    "soil": "Soil",
+    "tunnel": "Lining",
+    "vehicle": "Vehicle",
+    "longterm": "Long-term settlement",
+    "numerics": "Numerics",
+}
+"""Collapsible groups in display order: section → title."""
+
+HIDDEN = {"irregularity.profile_csv"}
+"""Not offered as a control: a measured profile is a server-side file; set it in a scenario file."""
+
+
+def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:
+    """A collapsed card whose contents are rendered only when it is first opened.
+
+    Rendering every group's ~50 controls up front costs seconds of page load; most sessions
+    never open most groups.
+    """
+    card = pn.Card(collapsed=True, sizing_mode="stretch_width", **params)
+
+    def fill(event):
+        if not event.new and not card.objects:
+            card.objects = members
+
+    card.param.watch(fill, "collapsed")
+    return card
+
+
+def _note_html(text: str) -> str:
+    """Small grey paragraph showing ``text`` literally."""
+    return f'<div style="font-size: 12px; color: #57606a">{html.escape(text)}</div>'
+
+
+class InputsPanel:
+    """The inputs of one session, bound to its scenario both ways.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The session's inputs; edited in place.
+    preset : str
+        Name shown in the preset selector.
+    messages : Messages
+        Where refused values and bad scenario files are reported.
+    on_change : callable
+        ``on_change()``: called after an input changed (once when a whole scenario is replaced).
+    """
+
+    def __init__(
+        self, scenario: Scenario, preset: str, messages: Messages, on_change: Callable[[], None]
+    ) -> None:
+        self.scenario = scenario
+        self.base_preset = preset
+        """The preset the inputs started from (what-if names say what differs from it)."""
+        self.messages = messages
+        self._on_change = on_change
+        self._replacing = False
+        self._quiet = False
+        self._refused: dict[str, str] = {}
+
+        self.controls = {
+            f"{section}.{name}": ParameterControl(obj, f"{section}.{name}", self._on_refusal)
+            for section in SECTIONS
+            for obj in [getattr(scenario, section)]
+            for name in obj.param
+            if name != "name" and f"{section}.{name}" not in HIDDEN
+        }
+        for section in SECTIONS:
+            obj = getattr(scenario, section)
+            obj.param.watch(self._on_parameter, [n for n in obj.param if n != "name"])
+
+        self._preset_descriptions = scenarios.preset_descriptions()
+        self.preset_select = pn.widgets.Select(
+            label="Preset",
+            options=[*self._preset_descriptions, scenarios.CUSTOM],
+            value=preset,
+            description="Named scenario; choosing one replaces every input. Shows "
+            f"'{scenarios.CUSTOM}' once an input differs from every preset.",
+            sizing_mode="stretch_width",
+        )
+        self.preset_select.param.watch(self._on_preset, "value")
+        self.preset_note = pn.pane.HTML(
+            _note_html(self._preset_descriptions.get(preset, "")),
+            margin=(0, 10),
+            sizing_mode="stretch_width",
+        )
+        self.train_type = pn.widgets.Select(
+            label="Train type",
+            options=[*scenarios.TRAIN_TYPES, scenarios.CUSTOM],
+            value=scenarios.train_type_of(scenario.train),
+            description="Car length, bogie-centre distance and wheelbase of a standard "
+            "Chinese metro car.",
+            sizing_mode="stretch_width",
+        )
+        self.train_type.param.watch(self._on_train_type, "value")
+        self.save_button = pn.widgets.FileDownload(
+            callback=self._scenario_file,
+            filename="scenario.json",
+            label="Save scenario",
+            sizing_mode="stretch_width",
+        )
+        self.load_input = pn.widgets.FileInput(
+            accept=".json", multiple=False, sizing_mode="stretch_width"
+        )
+        self.load_input.param.watch(self._on_load, "value")
+
+    def sidebar(self) -> list[pn.viewable.Viewable]:
+        """Preset, model switch, train type and main inputs; the rest in groups; the file."""
+        up_front = {*PRIMARY, *SWITCHES}
+        groups = [
+            _lazy_card(
+                [
+                    control
+                    for path, control in self.controls.items()
+                    if path.startswith(f"{section}.") and path not in up_front
+                ],
+                title=title,
+                css_classes=[f"group-{section}"],
+            )
+            for section, title in GROUP_TITLES.items()
+        ]
+        files = pn.Card(
+            self.save_button,
+            pn.pane.Markdown("Load a scenario file:", margin=(0, 5)),
+            self.load_input,
+            title="Scenario file",
+            collapsed=True,
+            sizing_mode="stretch_width",
+        )
+        return [
+            self.preset_select,
+            self.preset_note,
+            *[self.controls[path] for path in SWITCHES],
+            self.train_type,
+            *[self.controls[path] for path in PRIMARY],
+            *groups,
+            files,
+        ]
+
+    def show_matching(self) -> None:
+        """The preset and train type selectors name what the inputs match ('custom' if
+        nothing), without treating it as the user's choice."""
+        self._set_quietly(self.preset_select, scenarios.matching_preset(self.scenario))
+        self._set_quietly(self.train_type, scenarios.train_type_of(self.scenario.train))
+
+    def replace_scenario(self, scenario: Scenario) -> None:
+        """Adopt every input of ``scenario`` (controls follow), then one change."""
+        self._replacing = True
+        try:
+            self.scenario.update(scenario.to_dict())
+        finally:
+            self._replacing = False
+        self._refused.clear()
+        self.messages.clear_error()
+        self._after_change()
+
+    def _on_parameter(self, *events: param.parameterized.Event) -> None:
+        """An input changed (control, train type): the selectors follow, then the change."""
+        if self._replacing:
+            return
+        self._after_change()
+
+    def _after_change(self) -> None:
+        """The selectors follow the inputs; the change is passed on."""
+        self.show_matching()
+        self._on_change()
+
+    def _on_refusal(self, path: str, message: str | None) -> None:
+        """A control refused an edit (message) or accepted one (None)."""
+        if message is None:
+            if self._refused.pop(path, None) is not None or not self._refused:
+                self.messages.clear_error()
+            return
+        self._refused[path] = message
+        self.messages.show_error("Value not accepted:", [message])
+
+    def _on_preset(self, event: param.parameterized.Event) -> None:
+        """Replace every input by the chosen preset's."""
+        if self._quiet or event.new == scenarios.CUSTOM:
+            return
+        self.preset_note.object = _note_html(self._preset_descriptions.get(event.new, ""))
+        self.base_preset = event.new
+        self.replace_scenario(Scenario.preset(event.new))
+
+    def _on_train_type(self, event: param.parameterized.Event) -> None:
+        """Apply the geometry of a standard train type."""
+        if not self._quiet and event.new != scenarios.CUSTOM:
+            scenarios.apply_train_type(self.scenario, event.new)
+
+    def _on_load(self, event: param.parameterized.Event) -> None:
+        """Load a scenario file written by "Save scenario"; a bad file gives a clear message."""
+        if event.new is None:
+            return
+        filename = self.load_input.filename or "the file"
+        self.load_input.clear()  # so that loading the same file again is a new event
+        try:
+            scenario = Scenario.from_json(event.new.decode("utf-8"))
+        except (ValueError, KeyError, TypeError, AttributeError) as error:
+            self.messages.show_error(
+                f"Could not load {filename} as a scenario:", [scenarios.error_text(error)]
+            )
+            return
+        self.replace_scenario(scenario)
+
+    def _set_quietly(self, widget: pn.widgets.Widget, value) -> None:
+        """Set a selector without treating it as the user's choice."""
+        self._quiet = True
+        try:
+            widget.value = value
+        finally:
+            self._quiet = False
+
+    def _scenario_file(self) -> io.StringIO:
+        """Current inputs as a JSON file."""
+        return io.StringIO(self.scenario.to_json())

@@ -1,0 +1,200 @@
+"""The panes that show a view's plots of a run, and how a run updates them.
+
+Each plot (a :class:`~dashboard.plots.PlotSpec`) sits in a pane inside a box of its own. Its
+first results create a DynamicMap on a stream; later ones are sent through the stream and
+update the Bokeh figure in place, which is far cheaper on both ends than replacing the figure.
+While a run that will change a plot computes, the plot's box is dimmed. :class:`PlotsView` is
+the base of the views whose plots show a run; :func:`one_message` sends a method's page changes
+to the browser as one message.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Iterable
+
+import holoviews as hv
+import panel as pn
+from holoviews.streams import Pipe
+
+from dashboard import plots
+from model.pipeline import Results
+
+# The opacity is always stated: the browser keeps a style that a new set of styles leaves out.
+PLOT_STYLES = {"flex": "1 1 440px", "opacity": "1"}
+# A plot that a run will redraw is dimmed, not covered by Panel's animated loading spinner: the
+# spinner's animation cost the browser more than the redraw itself (1.4 s of CPU per change).
+STALE_PLOT_STYLES = {**PLOT_STYLES, "opacity": "0.45"}
+
+DrawArguments = Callable[[plots.PlotSpec], dict]
+"""``draw_arguments(spec)``: keyword arguments of ``spec.draw`` besides the results."""
+
+
+def one_message(*, reindex_once: bool = False):
+    """Decorate a page-updating method: its changes reach the browser as one message.
+
+    With ``reindex_once`` the document's models are re-indexed once at the end instead of
+    after each change of a model reference (each re-indexing walks every model of the page).
+    Only for methods that update existing plots: a plot made while the index is frozen misses
+    the page design's Bokeh theme (its title came out small).
+    """
+
+    def decorate(method):
+        @functools.wraps(method)
+        def held(*args, **kwargs):
+            with pn.io.hold(freeze=reindex_once):
+                return method(*args, **kwargs)
+
+        return held
+
+    return decorate
+
+
+def _drawing(spec: plots.PlotSpec, draw_arguments: DrawArguments):
+    """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``), with the
+    keyword arguments ``draw_arguments(spec)`` gives at the time of drawing."""
+
+    def callback(data):
+        return spec.draw(data, **draw_arguments(spec))
+
+    return callback
+
+
+class PlotPanes:
+    """The plots of one view, each in a pane that a run updates in place.
+
+    Parameters
+    ----------
+    specs : iterable of PlotSpec
+        The plots, in display order.
+    draw_arguments : callable, optional
+        ``draw_arguments(spec)``: keyword arguments of ``spec.draw`` besides the results (e.g.
+        the pinned runs), asked for each time the plot is drawn; none by default.
+    """
+
+    def __init__(
+        self, specs: Iterable[plots.PlotSpec], draw_arguments: DrawArguments | None = None
+    ) -> None:
+        self.specs = tuple(specs)
+        self._draw_arguments = draw_arguments or (lambda spec: {})
+        self.panes = {
+            spec.key: pn.pane.HoloViews(
+                None,
+                sizing_mode="stretch_width",
+                loading=True,
+                min_height=plots.PLOT_HEIGHT,
+                min_width=plots.PLOT_MIN_WIDTH,
+                # each plot's axes follow its own data: Panel would otherwise share the ranges
+                # of plots drawn in the same layout with the same dimension (both PSDs' "f",
+                # on slightly different frequency grids), cutting one of them off
+                linked_axes=False,
+                css_classes=["plot", f"plot-{spec.key}", f"stage-{spec.stage}"],
+            )
+            for spec in self.specs
+        }
+        self.cells = {
+            key: pn.Column(
+                pane,
+                styles=PLOT_STYLES,
+                min_width=plots.PLOT_MIN_WIDTH,
+                sizing_mode="stretch_width",
+            )
+            for key, pane in self.panes.items()
+        }
+        """Per plot, the box around its pane (flex item; dimmed while the plot is stale)."""
+        self.streams: dict[str, Pipe] = {}
+        """Per plot, the stream holding the Results it shows (sent only when its stage changed)."""
+
+    def flexbox(self) -> pn.FlexBox:
+        """The plots' boxes in one row that wraps in a narrow window."""
+        return pn.FlexBox(*self.cells.values(), sizing_mode="stretch_width")
+
+    @property
+    def drawn(self) -> bool:
+        """True once every plot exists (later results update them in place)."""
+        return len(self.streams) == len(self.specs)
+
+    def is_stale(self, key: str) -> bool:
+        """True while the plot ``key`` waits for a run that will change it."""
+        return self.panes[key].loading or self.cells[key].styles == STALE_PLOT_STYLES
+
+    def mark_stale(self, stages: set[str]) -> None:
+        """Dim the plots of ``stages``: a run computing will change them."""
+        for spec in self.specs:
+            if spec.stage in stages:
+                self._set_stale(spec.key, True)
+
+    def show(self, results: Results, redrawn: set[str]) -> None:
+        """Draw ``results`` in the plots of the ``redrawn`` stages; undim every plot."""
+        for spec in self.specs:
+            if spec.stage in redrawn:
+                stream = self.streams.get(spec.key)
+                if stream is None:
+                    self._new_plot(spec, results)
+                else:
+                    stream.send(results)
+            self._set_stale(spec.key, False)
+
+    def settle(self) -> None:
+        """Undim every plot (the run they waited for failed: they keep what they show)."""
+        for key in self.panes:
+            self._set_stale(key, False)
+
+    def rebuild(self, results: Results) -> None:
+        """New plots of ``results`` in place of the drawn ones (the set of curves a plot draws
+        is fixed when it is made: a change of that set needs a new plot)."""
+        for spec in self.specs:
+            self._new_plot(spec, results)
+
+    def send(self, key: str, results: Results) -> None:
+        """Draw the plot ``key`` again, of ``results`` (if it exists)."""
+        stream = self.streams.get(key)
+        if stream is not None:
+            stream.send(results)
+
+    def close(self) -> None:
+        """Drop the plots (a closed session's memory returns at once)."""
+        for pane in self.panes.values():
+            pane.object = None
+        self.streams.clear()
+
+    def _new_plot(self, spec: plots.PlotSpec, results: Results) -> None:
+        """A new plot of ``results``; its stream then updates it in place."""
+        stream = self.streams[spec.key] = Pipe(data=results)
+        self.panes[spec.key].object = hv.DynamicMap(
+            _drawing(spec, self._draw_arguments), streams=[stream]
+        )
+
+    def _set_stale(self, key: str, stale: bool) -> None:
+        """Dim a drawn plot that a run will change (undim it when drawn); a plot not drawn yet
+        shows the loading spinner until its first results."""
+        pane, cell = self.panes[key], self.cells[key]
+        if pane.object is None:
+            pane.loading = stale
+            return
+        pane.loading = False
+        cell.styles = STALE_PLOT_STYLES if stale else PLOT_STYLES
+
+
+class PlotsView(pn.viewable.Viewer):
+    """Base of a view whose :attr:`plots` (a :class:`PlotPanes`, set by the subclass) show the
+    session's runs: what :class:`~dashboard.runs.SessionRuns` asks of a view's plots."""
+
+    plots: PlotPanes
+
+    @property
+    def drawn(self) -> bool:
+        """True once every plot exists."""
+        return self.plots.drawn
+
+    def mark_stale(self, stages: set[str]) -> None:
+        """Dim the plots that a computing run will change."""
+        self.plots.mark_stale(stages)
+
+    def settle(self) -> None:
+        """Undim the plots: the run they waited for failed."""
+        self.plots.settle()
+
+    def close(self) -> None:
+        """Drop the plots of a closed session."""
+        self.plots.close()
