@@ -33,6 +33,7 @@ PUBLIC_API = {
     "receptance_2p5d": "model.soil.moving_load_2p5d",
     "point_load_response": "model.soil.point_load",
     "soil_response": "model.soil.response",
+    "halfspace_point_response": "model.soil.halfspace",
     "long_term_settlement": "model.longterm.settlement",
     "fit_strain_law": "model.longterm.calibration",
     "load_triaxial_csv": "model.longterm.calibration",

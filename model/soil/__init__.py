@@ -15,5 +15,10 @@ docs/tunnel_soil_3d.md (2.5D).
 - ``response``: the line-load history through the chosen kernel to displacement histories at
   depth, their peaks and spectra (§8) — the *transient* response, not the permanent settlement;
 - ``stresses``: the dynamic stresses and deviator under the invert per passage, from the same
-  kernel evaluation, which drive the long-term stage (§10).
+  kernel evaluation, which drive the long-term stage (§10);
+- ``halfspace_kernels``: plane waves in a half-space, the free-surface reflection in closed form
+  in a basis regular down to ω = 0 (§16);
+- ``hankel``: the adaptive Gauss–Kronrod Hankel transform from radial wavenumber to distance;
+- ``halfspace``: the half-space Green's function :func:`halfspace_point_response` (Stokes +
+  reflected field; Mindlin at ω = 0, Rayleigh waves at the surface).
 """
