@@ -129,7 +129,8 @@ def prepare_output_folder(out: Path, force: bool) -> None:
 
 def write_results(results: Results, out: Path) -> list[Path]:
     """Write time histories, spectra, the depth profile, the long-term settlement against time and
-    per depth (CSV), scenario and summary (JSON)."""
+    per depth, and (half-space ground) the ground-surface levels and peaks (CSV), scenario and
+    summary (JSON)."""
     out.mkdir(parents=True, exist_ok=True)
     vt, load, soil, lt = results.vehicle_track, results.load, results.soil, results.longterm
     tables = {
@@ -165,6 +166,22 @@ def write_results(results: Results, out: Path) -> list[Path]:
             "strain_percent": lt.strain_percent,
         },
     }
+    ground = results.ground
+    if ground is not None:  # the half-space model's ground surface (docs/model.md §16)
+        tables["ground_levels.csv"] = {
+            "band_centre_hz": ground.band_centre_hz,
+            "band_nominal_hz": ground.band_nominal_hz,
+            **{
+                f"level_{d:g}m_dB": level
+                for d, level in zip(ground.distance_m, ground.velocity_level_dB.T, strict=True)
+            },
+        }
+        tables["ground_profile.csv"] = {
+            "distance_m": ground.distance_m,
+            "overall_level_dB": ground.overall_level_dB,
+            "peak_velocity_m_per_s": ground.peak_velocity_m_per_s,
+            "peak_disp_m": ground.peak_disp_m,
+        }
     written = []
     for name, columns in tables.items():
         path = out / name

@@ -32,6 +32,8 @@ from model.longterm.geostatic import check_longterm_inputs
 from model.longterm.settlement import LongTermResult, long_term_settlement
 from model.params import Scenario, ScenarioError
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
+from model.soil.ground_vibration import GroundResponse, ground_summary
+from model.soil.halfspace_response import halfspace_response, halfspace_transfer
 from model.soil.response import COMPARISON_DEPTH_M, SoilResponse, response_tail
 from model.soil.stresses import StressResponse, section_response, section_transfer
 from model.spectra import one_sided_psd
@@ -49,6 +51,9 @@ LOAD_NUMERICS = ("psd_segment",)
 # Numerics of the 2.5D model's wavenumber integral (model.soil.point_load.point_load_response):
 # in the soil key only when tunnel.model is "2.5d", so they never invalidate a 2D result.
 WAVENUMBER_NUMERICS = ("n_wavenumbers", "max_wavenumber", "wavenumber_tolerance")
+# Numerics of the ground-surface results of the half-space model: in the soil key only when
+# tunnel.ground is "half_space".
+GROUND_NUMERICS = ("ground_max_distance", "n_ground_distances")
 SOIL_NUMERICS = (
     "n_harmonics",
     "soil_max_frequency",
@@ -58,6 +63,7 @@ SOIL_NUMERICS = (
     "n_depths",
     "kernel_samples_per_cycle",
     *WAVENUMBER_NUMERICS,
+    *GROUND_NUMERICS,
 )
 
 # Tunnel parameters read by the long-term stage only (the static stress state; the full-space
@@ -102,6 +108,9 @@ class Results:
     stress: StressResponse
     """Dynamic deviator under the invert, computed by the soil stage."""
     longterm: LongTermResult
+    ground: GroundResponse | None = None
+    """Ground-surface vibration, computed by the soil stage with tunnel.ground = "half_space";
+    None for the full-space models, which have no ground surface."""
     warnings: list[str] = field(default_factory=list)
     stage_seconds: dict[str, float] = field(default_factory=dict)
     """Wall time of each stage in this run; 0.0 for a stage served from the cache."""
@@ -135,6 +144,7 @@ class Results:
             "strength_invert_Pa": float(self.longterm.strength_Pa[0]),
             "longterm_settlement_m": float(self.longterm.settlement_m[-1]),
             "longterm_depth90_m": self.longterm.depth90_m,
+            **(ground_summary(self.ground) if self.ground is not None else {}),
         }
 
 
@@ -263,14 +273,20 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
     load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
     moving_load = scenario.tunnel.model == "2.5d"
+    half_space = scenario.tunnel.ground == "half_space"
     soil = {
         "upstream": load,
-        "tunnel": {  # includes tunnel.model
-            name: value for name, value in data["tunnel"].items() if name not in LONGTERM_TUNNEL
+        "tunnel": {  # includes tunnel.model and tunnel.ground
+            name: value
+            for name, value in data["tunnel"].items()
+            if half_space or name not in LONGTERM_TUNNEL
         },
         "soil": data["soil"],
         "numerics": pick(
-            name for name in SOIL_NUMERICS if moving_load or name not in WAVENUMBER_NUMERICS
+            name
+            for name in SOIL_NUMERICS
+            if (moving_load or name not in WAVENUMBER_NUMERICS)
+            and (half_space or name not in GROUND_NUMERICS)
         ),
     }
     if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v
@@ -366,18 +382,26 @@ def run(
         )
     load = stage("load", lambda: _load_stage(vt, scenario))
 
+    # the half-space model adds the ground-surface results (docs/model.md §16)
+    half_space = scenario.tunnel.ground == "half_space"
+    respond, transfer_of = (
+        (halfspace_response, halfspace_transfer)
+        if half_space
+        else (lambda *args: (*section_response(*args), None), section_transfer)
+    )
+
     def soil_stage():
         q, dt = load.line_load_N_per_m, _time_step(load.t_s)
         if cache is None:
-            return section_response(q, dt, scenario)
+            return respond(q, dt, scenario)
         transfer, _ = cache.fetch(
             TRANSFER,
             f"{keys[TRANSFER]} record {q.size} × {dt!r} s",
-            lambda: _read_only(section_transfer(q, dt, scenario)),
+            lambda: _read_only(transfer_of(q, dt, scenario)),
         )
-        return section_response(q, dt, scenario, transfer)
+        return respond(q, dt, scenario, transfer)
 
-    soil, stress = stage("soil", soil_stage)
+    soil, stress, ground = stage("soil", soil_stage)
     longterm = stage("longterm", lambda: long_term_settlement(stress, scenario))
     run_warnings = (
         list(vt.warnings)
@@ -392,6 +416,7 @@ def run(
         soil=soil,
         stress=stress,
         longterm=longterm,
+        ground=ground,
         warnings=run_warnings,
         stage_seconds=seconds,
         cached_stages=tuple(cached),
@@ -399,8 +424,10 @@ def run(
 
 
 def _read_only(stage_result):
-    """The stage result (a dataclass, or a tuple of them) with every array in it, nested
-    dataclasses included, made read-only."""
+    """The stage result (a dataclass, or a tuple of them and None) with every array in it,
+    nested dataclasses included, made read-only."""
+    if stage_result is None:
+        return None
     if isinstance(stage_result, tuple):
         for part in stage_result:
             _read_only(part)

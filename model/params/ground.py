@@ -18,8 +18,8 @@ class Tunnel(param.Parameterized):
     """Concrete lining as a thin elastic ring in plane strain (paper Table 3, corrected).
 
     Used by ``model.soil.inputs.ring_constants`` (a, m, K, D of the 2D ring and the 2.5D shell);
-    the axis depth only by the static stress state of the long-term stage (the full-space soil
-    models have no ground surface).
+    the axis depth by the static stress state of the long-term stage and, with ``ground`` =
+    "half_space", by the tunnel in a half-space (``model.soil.pipe_in_pipe``).
     Besides the bounds, ``Scenario.validate`` requires a thin ring, h/a ≤ ``THIN_RING_MAX_RATIO``.
     """
 
@@ -74,9 +74,10 @@ class Tunnel(param.Parameterized):
         (8.0, 40.0),
         "Tunnel axis depth (m)",
         "Depth of the tunnel axis below the ground surface, H_t, for the static stress state in "
-        "model.longterm.geostatic (and the FE gravity stage, model.fe.inputs.geostatic); the "
-        "paper gives none, 15 m is assumed. Bounds (0, 200] m; Scenario.validate requires the "
-        "lining below the ground surface.",
+        "model.longterm.geostatic (and the FE gravity stage, model.fe.inputs.geostatic) and, "
+        "with ground = half_space, the tunnel's distance to the free surface in "
+        "model.soil.pipe_in_pipe; the paper gives none, 15 m is assumed. Bounds (0, 200] m; "
+        "Scenario.validate requires the lining below the ground surface.",
         (False, True),
     )
 
@@ -88,6 +89,17 @@ class Tunnel(param.Parameterized):
         "over one block spacing on the whole tunnel at once; '2.5d': the lining as a cylindrical "
         "shell infinite along the tunnel, loaded by the moving train (kernel at ξ = ω/v). "
         "Dispatched by the soil stage of model.pipeline.run.",
+    )
+
+    ground = param.Selector(
+        default="full_space",
+        objects=["full_space", "half_space"],
+        label="Ground",
+        doc="'full_space': the soil surrounds the tunnel on every side (the paper's model, no "
+        "ground surface); 'half_space': the soil ends at a free ground surface axis_depth above "
+        "the tunnel axis (pipe-in-pipe method, model.soil.pipe_in_pipe; docs/halfspace.md), "
+        "which also gives the vibration at the ground surface. Needs model = '2.5d' "
+        "(Scenario.validate).",
     )
 
     @property

@@ -155,3 +155,22 @@ class Numerics(param.Parameterized):
         "interpolation errs by up to 1 % of the transfer functions (docs/tunnel_soil.md); 12 "
         "keeps the error below 1e-4.",
     )
+    ground_max_distance = _q(
+        50.0,
+        (10.0, 500.0),
+        (20.0, 150.0),
+        "Farthest ground-surface distance (m)",
+        "Horizontal distance from the tunnel axis, on the ground surface, up to which the "
+        "half-space model reports the vibration (model.soil.halfspace_response.ground_distances)."
+        " Bounds 10–500 m: vibration assessments look at 0–50 m, and the wave-number panels "
+        "narrow as 1/distance.",
+    )
+    n_ground_distances = Count(
+        26,
+        bounds=(2, 1001),
+        softbounds=(6, 101),
+        label="Ground-surface points",
+        doc="Number of equally spaced ground-surface points from above the axis (0 m) to the "
+        "farthest distance (model.soil.halfspace_response.ground_distances); 26 gives 2 m steps "
+        "for 50 m.",
+    )

@@ -20,5 +20,12 @@ docs/tunnel_soil_3d.md (2.5D).
   in a basis regular down to ω = 0 (§16);
 - ``hankel``: the adaptive Gauss–Kronrod Hankel transform from radial wavenumber to distance;
 - ``halfspace``: the half-space Green's function :func:`halfspace_point_response` (Stokes +
-  reflected field; Mindlin at ω = 0, Rayleigh waves at the surface).
+  reflected field; Mindlin at ω = 0, Rayleigh waves at the surface);
+- ``pipe_in_pipe``: the 2.5D tunnel in a half-space (the full-space tunnel's waves reflected at
+  the free surface, not scattered back): the field above the axis, at the ground surface and
+  the reflected field under the invert;
+- ``ground_vibration``: one-third-octave bands, velocity levels re 1e-9 m/s, the ground-surface
+  results of a passage;
+- ``halfspace_response``: the soil stage in a half-space (under the invert and at the ground
+  surface), which ``model.pipeline.run`` uses with ``tunnel.ground == "half_space"``.
 """

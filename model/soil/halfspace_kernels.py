@@ -108,12 +108,18 @@ def reflect_at_surface(a_p, a_q, k, nu_p, nu_s, delta_s, ratio, ks2):
 
 @numba.njit(cache=True, nogil=True)
 def downgoing_uw(b_p, b_q, z, k, nu_p, nu_s, delta_s, ratio):
-    """(U, W, ∂U/∂z, ∂W/∂z) at depth z of the down-going field b_P P(−) + b_Q Q(−).
+    """(U, W, ∂U/∂z, ∂W/∂z) at depth z of the down-going field b_P P(−) + b_Q Q(−)."""
+    e_p, d_z = divided_difference(z, nu_p, delta_s, ratio)
+    return downgoing_from_exponentials(b_p, b_q, e_p, d_z, k, nu_p, nu_s, ratio)
+
+
+@numba.njit(cache=True, nogil=True)
+def downgoing_from_exponentials(b_p, b_q, e_p, d_z, k, nu_p, nu_s, ratio):
+    """(U, W, ∂U/∂z, ∂W/∂z) of b_P P(−) + b_Q Q(−) from e^{−ν_p z} and D(z).
 
     P(−) = (k, −ν_p) e^{−ν_p z}, Q(−) = (e^{−ν_p z} − ν_s D, k D + ρ_ps e^{−ν_p z}); their
     derivatives ∂P(−) = −ν_p P(−), ∂Q(−) = −ν_s Q(−) − (1 − ρ_ps) P(−) (regular as ω → 0).
     """
-    e_p, d_z = divided_difference(z, nu_p, delta_s, ratio)
     pu, pw = k * e_p, -nu_p * e_p
     qu, qw = e_p - nu_s * d_z, k * d_z + ratio * e_p
     u = b_p * pu + b_q * qu
