@@ -5,7 +5,8 @@ The wiring layer only: it builds one session's page from its parts and connects 
 sidebar's inputs are :mod:`dashboard.inputs`, the messages above the views
 :mod:`dashboard.messages`, the runs with their progress bar and status line
 :mod:`dashboard.runs`; the views are :mod:`dashboard.passage_view` (with the what-if panel of
-:mod:`dashboard.whatif_view`), :mod:`dashboard.longterm_view` and :mod:`dashboard.study_view`;
+:mod:`dashboard.whatif_view`), :mod:`dashboard.longterm_view`, :mod:`dashboard.ground_view` and
+:mod:`dashboard.study_view`;
 the report button is :mod:`dashboard.report`'s. ``--warm`` compiles the kernels when the server
 starts.
 
@@ -20,6 +21,7 @@ from concurrent.futures import Executor, Future
 import panel as pn
 import param
 
+from dashboard.ground_view import GroundView
 from dashboard.inputs import InputsPanel
 from dashboard.longterm_view import LongTermView
 from dashboard.messages import Messages
@@ -86,7 +88,8 @@ class Dashboard(pn.viewable.Viewer):
         )
         self.passage = PassageView(self.whatif, companions=self.runs.depth_companions)
         self.longterm = LongTermView(self.scenario.longterm)
-        self.runs.views = (self.passage, self.longterm)
+        self.ground = GroundView()
+        self.runs.views = (self.passage, self.longterm, self.ground)
         self.study = StudyView(scenario_source=lambda: self.scenario.copy())
         self.report_button = report_button(
             results=lambda: self.runs.results, scenario_name=lambda: self.inputs.preset_select.value
@@ -96,6 +99,7 @@ class Dashboard(pn.viewable.Viewer):
         self.views: dict[str, pn.viewable.Viewable] = {
             "Passage": self.passage,
             "Long-term settlement": self.longterm,
+            "Ground vibration": self.ground,
             "Study": self.study,
         }
         """Main-area views by tab title; :meth:`add_view` adds one."""
@@ -166,6 +170,7 @@ class Dashboard(pn.viewable.Viewer):
         """Drop the results and plots of a closed session (its memory returns at once)."""
         self.passage.close()
         self.longterm.close()
+        self.ground.close()
         self.runs.close()
 
     def _after_change(self) -> None:

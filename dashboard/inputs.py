@@ -23,7 +23,7 @@ from model.params import SECTIONS, Scenario
 PRIMARY = ("train.speed_kmh", "soil.youngs_modulus", "track.fastener_stiffness")
 """Main inputs, shown up front; every other parameter sits in its section's collapsible group."""
 
-SWITCHES = ("tunnel.model",)
+SWITCHES = ("tunnel.model", "tunnel.ground")
 """Model switches shown up front with the presets."""
 
 GROUP_TITLES = {

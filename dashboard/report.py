@@ -24,6 +24,7 @@ from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
+from dashboard.ground_view import GROUND_PLOTS, ground_statement
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
 from model.pipeline import Results
 
@@ -70,7 +71,7 @@ def report_header(scenario_name: str, when: datetime.datetime | None = None) -> 
 
 def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
     """Panel layout of the report: header (scenario name, date, version), summary, warnings,
-    every plot and the full scenario JSON."""
+    every plot (with the ground-vibration section in a half-space) and the full scenario JSON."""
     scenario = results.scenario
     warnings = "".join(f"<li>{html.escape(w)}</li>" for w in results.warnings)
     warning_block = (
@@ -104,13 +105,34 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
     longterm = pn.pane.Markdown(
         "### Long-term settlement\n\n" + law_statement(results), sizing_mode="stretch_width"
     )
+    ground = []
+    if results.ground is not None:  # the half-space model's ground surface
+        ground = [
+            pn.pane.Markdown(
+                "### Ground vibration\n\n" + ground_statement(results),
+                sizing_mode="stretch_width",
+            ),
+            pn.GridBox(
+                *[
+                    pn.pane.HoloViews(
+                        spec.draw(results), sizing_mode="stretch_width",
+                        css_classes=[f"plot-{spec.key}"],
+                    )
+                    for spec in GROUND_PLOTS
+                ],
+                ncols=2,
+                sizing_mode="stretch_width",
+            ),
+        ]  # fmt: skip
     scenario_block = pn.pane.HTML(
         "<h3>Scenario</h3><details open><summary>All inputs (JSON, SI units except "
         f'km/h)</summary><pre class="scenario-json">{html.escape(results.scenario_json)}'
         "</pre></details>",
         sizing_mode="stretch_width",
     )
-    return pn.Column(header, figures, longterm, scenario_block, sizing_mode="stretch_width")
+    return pn.Column(
+        header, figures, longterm, *ground, scenario_block, sizing_mode="stretch_width"
+    )
 
 
 def _packaged_stylesheet(sheet):

@@ -451,6 +451,7 @@ def test_views_are_tabs_and_an_added_view_becomes_one(dashboard):
     assert [title for title, _ in zip(dashboard.tabs._names, dashboard.tabs, strict=True)] == [
         "Passage",
         "Long-term settlement",
+        "Ground vibration",
         "Study",
         "Notes",
     ]
