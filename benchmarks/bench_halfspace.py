@@ -8,10 +8,9 @@ loading from its cache) and the best of N warm calls of
   transfer functions, the displacement and deviator histories);
 - the half-space soil stage, ``model.soil.halfspace_response.halfspace_response`` (the same plus
   the reflected field under the invert and the ground-surface response and levels);
-- their parts: the half-space transfer functions alone, and the pipe-in-pipe kernels on the
-  sampled frequencies;
+- of that, the half-space transfer functions alone (``halfspace_transfer``);
 - the public Green's function ``model.halfspace_point_response`` on 20 frequencies × 26
-  distances × 3 depths.
+  distances along x × 3 depths.
 
 Also the same stages at 200 km/h (faster than the soil's shear waves: every frequency
 radiates, the costly case). Timings are wall-clock on a shared 2-core machine: read the best.

@@ -1,7 +1,7 @@
 """The "Ground vibration" view: ground-surface velocity levels of the half-space model.
 
 Pure plot functions Results → HoloViews (shared with the report) read ``Results.ground``
-(docs/model.md §16): one-third-octave velocity levels against frequency at chosen distances
+(docs/halfspace.md): one-third-octave velocity levels against frequency at chosen distances
 from the tunnel axis, the overall level against distance, and the dynamic surface trough and
 peak velocity against distance, with a criterion level drawn on the level plots. Units an
 engineer reads: dB re 1e-9 m/s, Hz, m, mm, mm/s. :class:`GroundView` is the tab: its display

@@ -167,7 +167,7 @@ def write_results(results: Results, out: Path) -> list[Path]:
         },
     }
     ground = results.ground
-    if ground is not None:  # the half-space model's ground surface (docs/model.md §16)
+    if ground is not None:  # the half-space model's ground surface (docs/halfspace.md)
         tables["ground_levels.csv"] = {
             "band_centre_hz": ground.band_centre_hz,
             "band_nominal_hz": ground.band_nominal_hz,

@@ -382,7 +382,7 @@ def run(
         )
     load = stage("load", lambda: _load_stage(vt, scenario))
 
-    # the half-space model adds the ground-surface results (docs/model.md §16)
+    # the half-space model adds the ground-surface results (docs/halfspace.md)
     half_space = scenario.tunnel.ground == "half_space"
     respond, transfer_of = (
         (halfspace_response, halfspace_transfer)

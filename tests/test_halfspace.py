@@ -1,4 +1,4 @@
-"""The half-space Green's function (model.soil.halfspace, docs/model.md §16): Mindlin's static
+"""The half-space Green's function (model.soil.halfspace, docs/halfspace.md): Mindlin's static
 solution at the surface and at depth, its low-frequency limit, Lamb's problem (the surface far
 field travels at the Rayleigh speed), Stokes' full-space field and its deep-source limit,
 reciprocity, the traction-free surface and Navier's equation, convergence of the wavenumber

@@ -1,4 +1,4 @@
-"""The half-space through the pipeline (tunnel.ground = "half_space", docs/model.md §16): the
+"""The half-space through the pipeline (tunnel.ground = "half_space", docs/halfspace.md): the
 ground-surface results, their summary and files, the cache keys of the new inputs, the full-space
 limit of the whole soil stage, and the 2D section refused."""
 

@@ -315,10 +315,10 @@ class Scenario(param.Parameterized):
         if tunnel.ground == "half_space" and tunnel.model != "2.5d":
             problems.append(
                 "tunnel.ground = 'half_space' needs tunnel.model = '2.5d': in the 2D section (a "
-                "line load on the whole tunnel at once) the waves the ground surface reflects "
-                "reach the tunnel at 20–60 % of the direct field at the usual depths, too strong "
-                "for the pipe-in-pipe method, which neglects how the tunnel scatters them "
-                "(docs/halfspace.md)"
+                "line load on the whole tunnel at once) the field the ground surface reflects "
+                "is 20–70 % of the direct displacement at the invert at every frequency (axis "
+                "15 m deep, 0.05–5 Hz), too strong for the pipe-in-pipe method, which neglects "
+                "how the tunnel scatters it (docs/halfspace.md)"
             )
         profile = irr.profile_csv
         if irr.enabled and profile and not Path(profile).is_file():

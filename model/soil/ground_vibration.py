@@ -1,4 +1,4 @@
-"""Ground-borne vibration at the surface: one-third-octave velocity levels (docs/model.md §16).
+"""Ground-borne vibration at the surface: one-third-octave velocity levels (docs/halfspace.md).
 
 - **Bands**: one-third octaves per IEC 61260-1 (base 10): exact midband frequencies
   f_m = 1000 · 10^{x/10} Hz (x an integer), band edges f_m · 10^{∓1/20}; the nominal

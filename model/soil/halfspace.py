@@ -1,4 +1,4 @@
-"""Green's function of a homogeneous hysteretic half-space (docs/model.md §16, docs/halfspace.md).
+"""Green's function of a homogeneous hysteretic half-space (docs/halfspace.md).
 
 Coordinates x along the tunnel, y across, z **down** from the free surface; exp(+iωt). The
 field of a point force at depth c is Stokes' full-space field, in closed form
@@ -114,7 +114,7 @@ def rayleigh_wavenumber(freq_hz, soil) -> np.ndarray:
     """Complex Rayleigh wavenumber k_R(ω) of the half-space, the surface-wave pole.
 
     Root of (2k² − k_s²)² − 4k²ν_pν_s = 0 on the principal sheet (Re ν ≥ 0), by Newton's
-    iteration from Viktorov's estimate c_R/c_s ≈ (0.862 + 1.14ν)/(1 + ν) (docs/model.md §16);
+    iteration from Viktorov's estimate c_R/c_s ≈ (0.862 + 1.14ν)/(1 + ν) (docs/halfspace.md);
     damping makes it complex, Im k_R < 0 for exp(+iωt).
 
     Parameters
@@ -223,7 +223,7 @@ def fullspace_point_tensor(freq_hz, dx, dy, dz, soil) -> np.ndarray:
 def mindlin_vertical(r_m, z_m, source_depth_m, soil, elastic: bool = False) -> np.ndarray:
     """Mindlin's static vertical displacement w (down +) per unit downward force at depth c (m/N).
 
-    docs/model.md §16: w = [(3−4ν)/R₁ + (8(1−ν)² − (3−4ν))/R₂ + (z−c)²/R₁³
+    docs/halfspace.md: w = [(3−4ν)/R₁ + (8(1−ν)² − (3−4ν))/R₂ + (z−c)²/R₁³
     + ((3−4ν)(z+c)² − 2cz)/R₂³ + 6cz(z+c)²/R₂⁵] / (16πG(1−ν)),
     R₁ = √(r² + (z−c)²), R₂ = √(r² + (z+c)²).
 
@@ -345,7 +345,7 @@ def hankel_zz(freq_hz, r_m, z_m, source_depth_m, soil, rtol=DEFAULT_RTOL, scale=
 def halfspace_point_response(freq_hz, x_m, y_m, z_m, source_depth_m, soil, rtol=DEFAULT_RTOL):
     """Vertical displacement (down +) per unit downward point force at depth c under (0, 0).
 
-    MODEL.md §16: the half-space Green's function u_z = G_zz(ω; x, y, z; c). Stokes'
+    docs/halfspace.md: the half-space Green's function u_z = G_zz(ω; x, y, z; c). Stokes'
     closed-form full-space field (:func:`fullspace_point_tensor`, exact to rounding) plus the
     free-surface reflected field, the Hankel transform (1/2π)∫ Ĝ^R_zz(k) J₀(kr) k dk over the
     radial wavenumber (:func:`hankel_zz`), whose estimated error is ≤ ``rtol`` relative to the

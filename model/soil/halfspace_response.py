@@ -1,4 +1,4 @@
-"""The soil stage in a half-space: under the invert and at the ground surface (docs/model.md §16).
+"""The soil stage in a half-space: under the invert and at the ground surface (docs/halfspace.md).
 
 With ``tunnel.ground == "half_space"`` the soil stage of ``model.pipeline.run`` comes here
 instead of ``model.soil.stresses.section_response``. The tunnel is the 2.5D shell of

@@ -1,4 +1,4 @@
-"""The 2.5D tunnel in a half-space by the pipe-in-pipe method (docs/model.md §16, halfspace.md).
+"""The 2.5D tunnel in a half-space by the pipe-in-pipe method (docs/halfspace.md).
 
 Hussein & Hunt's pipe-in-pipe (PiP) recipe: solve the tunnel in a full-space (the shell–soil
 model of ``model.soil.moving_load_2p5d``, Forrest & Hunt 2006), then add the field that the free
@@ -462,7 +462,7 @@ def reflected_below_invert(freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil,
     At depth d below the ring–soil interface under the invert (y = 0, z = H + a + d, x = 0):
     the vertical displacement and the stresses σ_rr = σ_zz, σ_θθ = σ_yy, σ_xx, σ_rx = σ_zx of
     the reflected field (σ_rθ = σ_θx = 0 by symmetry), to be added to the full-space tunnel's
-    (docs/model.md §16, the pipe-in-pipe field).
+    (docs/halfspace.md, the pipe-in-pipe field).
 
     Parameters
     ----------
