@@ -29,6 +29,17 @@ def test_static_limit_is_mindlin_at_the_surface_and_at_depth():
     assert np.max(np.abs(u / w - 1.0)) < 1e-8
 
 
+def test_an_elastic_soil_at_zero_frequency_is_mindlin_s_elastic_solution():
+    """η_G = 0 is allowed at ω = 0: with the default tolerance the public function is the elastic
+    Mindlin solution (real G, ν) to 1e-6, at the surface and at depth (c = 10 m)."""
+    soil = Soil(shear_loss_factor=0.0)
+    r = np.array([0.0, 1.0, 5.0, 15.0, 40.0])
+    z = np.array([0.0, 5.0, 9.0, 15.0, 25.0])
+    u = model.halfspace_point_response(0.0, r, 0.0, z, 10.0, soil)[0, :, 0, :]
+    w = hs.mindlin_vertical(r[:, None], z[None, :], 10.0, soil, elastic=True)
+    assert np.max(np.abs(u / w - 1.0)) < 1e-6
+
+
 def test_mindlin_formula_against_boussinesq_and_kelvin():
     """The closed form itself: as c → 0 at the surface it is Boussinesq's (1 − ν)/(2πμr); far
     from the surface (c → ∞, z − c fixed) Kelvin's ((3 − 4ν) + cos²)/(16πμ(1 − ν)R)."""
