@@ -24,6 +24,7 @@ from model.soil.ground_vibration import LEVEL_FLOOR_DB
 LEVEL = hv.Dimension("level", label="Velocity level (dB re 1e-9 m/s)", unit=None)
 DISTANCE = hv.Dimension("distance", label="Distance from the tunnel axis", unit="m")
 BAND = hv.Dimension("band", label="One-third-octave band centre", unit="Hz")
+KMH_PER_M_S = 3.6
 LEVEL_SPAN_DB = 100.0  # the level plots show this far below their largest value
 BAND_TICKS = (1, 2, 4, 8, 16, 31.5, 63)  # octave-band labels on the log frequency axis (Hz)
 CRITERION_COLOUR = "#d62728"
@@ -34,11 +35,18 @@ NO_GROUND = (
 EXCITATION_NOTE = (
     "Excitation: the invert load of the passage, convected with the train (the moving-frame "
     "rule of the 2.5D model, docs/model.md §9): the axles' quasi-static loading, exact on a "
-    "smooth rail. For a train slower than the soil's shear waves this field does not radiate, "
-    "so the levels fall steeply above a few hertz and reach the reporting floor "
-    f"({LEVEL_FLOOR_DB:g} dB). The dynamic wheel–rail forces of the irregularity and of the "
+    "smooth rail. {regime} The dynamic wheel–rail forces of the irregularity and of the "
     "sleeper passing, which dominate measured levels above ~10 Hz, are not radiated by this "
     "rule: above a few hertz these levels are a lower bound (docs/halfspace.md)."
+)
+SUBSONIC = (
+    "The train ({speed:.0f} km/h) is slower than the soil's shear waves ({shear:.0f} km/h): "
+    "this field does not radiate, so the levels fall steeply above a few hertz and reach the "
+    f"reporting floor ({LEVEL_FLOOR_DB:g} dB)."
+)
+SUPERSONIC = (
+    "The train ({speed:.0f} km/h) is faster than the soil's shear waves ({shear:.0f} km/h): "
+    "this field radiates (a Mach cone), and the levels stay high far from the tunnel."
 )
 
 
@@ -204,7 +212,11 @@ def ground_statement(results: Results, criterion_db: float | None = None) -> str
         f"{ground.free_surface_effect:+.0%} from the full-space value (pipe-in-pipe: the "
         "tunnel does not scatter the reflected waves, docs/halfspace.md)."
     )
-    lines.append(EXCITATION_NOTE)
+    speed, shear = results.scenario.train.speed, results.scenario.soil.s_wave_speed
+    regime = (SUBSONIC if speed < shear else SUPERSONIC).format(
+        speed=speed * KMH_PER_M_S, shear=shear * KMH_PER_M_S
+    )
+    lines.append(EXCITATION_NOTE.format(regime=regime))
     return "\n\n".join(lines)
 
 

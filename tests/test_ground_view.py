@@ -3,6 +3,8 @@ mm/s with the criterion line, the statement says how far the criterion is exceed
 settings redraw without a run, a full-space run says how to get surface results, and the report
 gains the ground section in a half-space only."""
 
+import dataclasses
+
 import holoviews as hv
 import numpy as np
 import pytest
@@ -70,6 +72,17 @@ def test_the_statement_says_how_far_the_criterion_is_exceeded(both):
     assert "not exceeded at any distance" in view.ground_statement(results, 200.0)
     assert "re 1e-9 m/s" in text
     assert "lower bound" in text  # the excitation caveat is always stated
+
+
+def test_the_excitation_note_follows_the_train_s_speed_against_the_shear_waves(both):
+    """100 km/h against c_s = 129 km/h: the field does not radiate; the same results labelled
+    200 km/h say it radiates (only the statement's wording is checked here)."""
+    results = both[0]
+    assert "slower than the soil's shear waves (129 km/h)" in view.ground_statement(results)
+    faster = results.scenario.copy()
+    faster.train.speed_kmh = 200.0
+    text = view.ground_statement(dataclasses.replace(results, scenario_json=faster.to_json()))
+    assert "faster than the soil's shear waves (129 km/h): this field radiates" in text
 
 
 def test_a_full_space_run_draws_empty_plots_and_says_why(both):
