@@ -85,7 +85,7 @@ class Dashboard(pn.viewable.Viewer):
             preset=lambda: self.inputs.base_preset,
         )
         self.passage = PassageView(self.whatif, companions=self.runs.depth_companions)
-        self.longterm = LongTermView(self.scenario.longterm)
+        self.longterm = LongTermView(self.scenario.longterm, self.scenario.site)
         self.runs.views = (self.passage, self.longterm)
         self.study = StudyView(scenario_source=lambda: self.scenario.copy())
         self.report_button = report_button(

@@ -98,8 +98,9 @@ def describe_change(path: str, value: Any) -> str:
     ----------
     path : str
         Dotted parameter path, ``"section.parameter"`` (e.g. ``"train.speed_kmh"``).
-    value : bool, int, float, str or None
-        The parameter's value in the model's units (SI, km/h for the speed).
+    value : bool, int, float, str, None or list
+        The parameter's value in the model's units (SI, km/h for the speed); the site's layers
+        as a list of records, named by their layers' names.
 
     Returns
     -------
@@ -114,6 +115,8 @@ def describe_change(path: str, value: Any) -> str:
         return f"{label} automatic"
     if isinstance(value, bool):
         return f"{label}: {'yes' if value else 'no'}"
+    if isinstance(value, list):  # the site's layers, as records
+        return f"{label} {', '.join(str(layer.get('name', '?')) for layer in value)}"
     if isinstance(value, int | float):
         unit, factor = _display_unit(unit, value)
         space = "" if unit in ("", "°", "%") else " "
