@@ -200,5 +200,5 @@ def serve_session() -> Dashboard:
 
 
 if pn.state.served:
-    pn.extension(notifications=False)
+    pn.extension("tabulator", notifications=False)  # the long-term tab's layer table
     serve_session()

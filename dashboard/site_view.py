@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 import panel as pn
 import param
+from bokeh.models.widgets.tables import HTMLTemplateFormatter
 
 from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
 from model.params import LAYER_PROPERTIES, Layer, Site
@@ -46,9 +47,9 @@ _LEGEND = {"legend_position": "bottom", "legend_cols": 3}
 def layer_boundary_lines(results: Results) -> hv.HLines:
     """Horizontal lines at the layer boundaries inside the long-term column (one element, so a
     change of the number of layers redraws the same plot)."""
-    return hv.HLines(np.asarray(results.longterm.layer_boundaries_m), label="layer boundary").opts(
-        **BOUNDARY_STYLE
-    )
+    depths = np.asarray(results.longterm.layer_boundaries_m)
+    label = "layer boundary" if depths.size else ""  # no legend entry without a line
+    return hv.HLines(depths, label=label).opts(**BOUNDARY_STYLE)
 
 
 def _layer_labels(results: Results, x: float) -> hv.Labels:
@@ -152,6 +153,28 @@ SITE_PLOTS = (
 
 TABLE_COLUMNS = LAYER_PROPERTIES
 """The layer table's columns: every layer property, in declaration order."""
+# Six significant digits in plain JavaScript notation (1e-9 m/s stays 1e-9, where a fixed
+# number of decimals showed 0.0), a dash for an optional value left empty (None).
+NUMBER_CELL = HTMLTemplateFormatter(
+    template='<%= (value == null || isNaN(value)) ? "–" : Number(Number(value).toPrecision(6)) %>'
+)
+
+
+def column_title(name: str) -> str:
+    """A short column title: the symbol of the label with the display unit ("γ (kN/m³)"), or
+    the label where it has no symbol ("Thickness (m)"); the full label is the tooltip."""
+    label = display_label(LAYER_PATH + name)
+    bare, _, unit = label.partition(" (")
+    words = bare.split()
+    symbol = words[-1]
+    if len(words) < 2 or (symbol.isalpha() and symbol.islower() and len(symbol) > 2):
+        return label
+    return f"{symbol} ({unit}" if unit else symbol
+
+
+def _tooltip(name: str) -> str:
+    """The full label of a column and what the property does (its parameter's doc)."""
+    return f"{display_label(LAYER_PATH + name)}. {Layer.param[name].doc or ''}".strip()
 
 
 def _factor(name: str) -> float:
@@ -229,8 +252,13 @@ class LayerTable(pn.viewable.Viewer):
         editors["soil_class"] = {"type": "list", "values": list(Layer.param["soil_class"].objects)}
         self.table = pn.widgets.Tabulator(
             layers_frame(self.site.layers),
-            titles={name: display_label(LAYER_PATH + name) for name in TABLE_COLUMNS},
+            titles={name: column_title(name) for name in TABLE_COLUMNS},
+            header_tooltips={name: _tooltip(name) for name in TABLE_COLUMNS},
+            sortable=False,  # the rows are the profile top down: never reordered on screen
             editors=editors,
+            formatters={
+                name: NUMBER_CELL for name in TABLE_COLUMNS if name not in ("name", "soil_class")
+            },
             show_index=False,
             frozen_columns=["name"],
             selectable=1,

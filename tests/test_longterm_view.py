@@ -71,7 +71,7 @@ def test_statement_names_law_parameters_results_and_warnings(results):
     assert "Li & Selig (1996) (soil class CH): a = 1.2 %, b = 0.18, m = 2.4" in text
     assert "200 trains per day" in text and "1 cycle per train" in text
     assert f"{results.longterm.settlement_m[-1] * 1e3:.3g} mm" in text
-    assert "plastic" in text and "consolidation" in text and "illustrative" in text
+    assert "plastic" in text and "consolidation" in text and "Illustrative defaults" in text
     scenario = results.scenario
     scenario.site.layers[0].undrained_strength = 1e3  # σ_s = 2 kPa, below q_d near the invert
     failing = run(scenario, cache=None)

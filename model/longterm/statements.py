@@ -22,6 +22,10 @@ SYMBOLS = {
     "alpha_u": "α",
     "beta_u": "β",
     "r_u_max": "r_u,max",
+    "compressibility": "m_v",
+    "recompression_index": "C_r",
+    "void_ratio": "e0",
+    "permeability": "k",
 }
 
 
@@ -96,17 +100,24 @@ def pore_pressure_statement(longterm, tunnel, layers: list[Layer]) -> str:
         drainage += (
             f" (lining k_l = {lt.lining_permeability:g} m/s through t_l = {tunnel.thickness:g} m)"
         )
-    illustrative = [layer.name for layer in layers if _illustrative(layer, names)]
+    defaults = [
+        f"{', '.join(SYMBOLS.get(n, n) for n in unsourced)} of {layer.name}"
+        for layer in layers
+        if (unsourced := _illustrative(layer, names))
+    ]
     note = (
-        f" The constants of {', '.join(illustrative)} are the illustrative defaults, not from a "
-        "test or a source: replace them with the site's data."
-        if illustrative
+        f" Illustrative defaults, not from a test or a source: {'; '.join(defaults)}; replace "
+        "them with the site's data."
+        if defaults
         else ""
     )
+    closed = lt.invert_drainage == "sealed" and lt.base_drainage == "sealed"
+    undrained = ": no boundary drains, so the water stays and S_c = 0" if closed else ""
     return (
         f"Pore pressure: {PORE_PRESSURE_LAWS[lt.pore_pressure_law]}, u_g = σ′_v0 r_u; "
         + "; ".join(parts)
-        + f"; consolidating while traffic goes on, {drainage}, base {lt.base_drainage}."
+        + f"; consolidating while traffic goes on, {drainage}, base {lt.base_drainage}"
+        + f"{undrained}."
         + note
     )
 
@@ -124,11 +135,17 @@ def _consolidation_constants(layer: Layer) -> str:
     return f"{m_v}, {flow}"
 
 
-def _illustrative(layer: Layer, law_constants) -> bool:
-    """True when a layer's pore-pressure and consolidation constants are all the defaults."""
-    names = (*law_constants, "compressibility", "recompression_index", "void_ratio")
-    names += ("permeability", "consolidation_coefficient")
-    return all(getattr(layer, name) == Layer.param[name].default for name in names)
+def _illustrative(layer: Layer, law_constants) -> list[str]:
+    """The constants in force in a layer (of the law, m_v or C_r and e0, k or c_v) that are
+    still the unsourced defaults (r_u,max is §15's rule, not a constant of the soil)."""
+    names = [name for name in law_constants if name != "r_u_max"]
+    if layer.compressibility is not None:
+        names.append("compressibility")
+    else:
+        names += ["recompression_index", "void_ratio"]
+    if layer.consolidation_coefficient is None:
+        names.append("permeability")
+    return [name for name in names if getattr(layer, name) == Layer.param[name].default]
 
 
 def depth_ranges(depth_m, mask) -> str:
