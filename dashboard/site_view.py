@@ -217,7 +217,11 @@ def _cell_text(value) -> str:
 def layers_html(site: Site) -> str:
     """HTML table of the site's layers in display units (the report's site section)."""
     frame = layers_frame(site.layers)
-    head = "".join(f"<th>{html.escape(display_label(LAYER_PATH + n))}</th>" for n in TABLE_COLUMNS)
+    head = "".join(
+        f'<th title="{html.escape(display_label(LAYER_PATH + n))}">'
+        f"{html.escape(column_title(n))}</th>"
+        for n in TABLE_COLUMNS
+    )
     body = "".join(
         "<tr>" + "".join(f"<td>{html.escape(_cell_text(v))}</td>" for v in row) + "</tr>"
         for row in frame.itertuples(index=False)
@@ -352,9 +356,11 @@ class LayerTable(pn.viewable.Viewer):
         return pn.Column(
             pn.pane.Markdown(
                 "One row a layer, top down from the ground surface; values in the units of the "
-                "column titles. The pore-pressure and consolidation constants default to "
-                "**illustrative** values, not from a source: replace them with the site's test "
-                "data.",
+                "column titles (hover a title for its meaning). a, b, m are read with soil class "
+                "'user' (else the class's set, named in the law above); C_r and e0 when m_v is "
+                "empty; k when c_v is empty. The pore-pressure and consolidation constants "
+                "default to **illustrative** values, not from a source: replace them with the "
+                "site's test data.",
                 margin=(0, 10),
             ),
             self.table,

@@ -176,6 +176,8 @@ COMPARED = (
     ComparedQuantity("peak_disp_11m_m", "Peak displacement 11 m below", "mm", 1e3),
     ComparedQuantity("peak_disp_deepest_m", "Peak displacement at the deepest depth", "mm", 1e3),
     ComparedQuantity("longterm_settlement_m", "Long-term settlement", "mm", 1e3),
+    ComparedQuantity("longterm_plastic_settlement_m", "… plastic part", "mm", 1e3),
+    ComparedQuantity("longterm_consolidation_settlement_m", "… consolidation part", "mm", 1e3),
 )
 """Key numbers compared, in column order; a quantity absent from every summary is left out
 (the long-term settlement exists only once the pipeline computes it)."""

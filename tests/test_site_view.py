@@ -113,7 +113,7 @@ def test_plots_and_report_of_a_layered_site(cheap_scenario):
     assert list(names.dimension_values("name")) == ["clay", "sand"]
     hv.render(overlay, backend="bokeh")
     html = site_view.layers_html(scenario.site)
-    assert "<th>Unit weight γ (kN/m³)</th>" in html
+    assert '<th title="Unit weight γ (kN/m³)">γ (kN/m³)</th>' in html
     assert "<td>clay</td>" in html and "<td>19</td>" in html  # 19 000 N/m³ shown in kN/m³
     report = build_report(results)
     assert any("report-layers" in (o.css_classes or []) for o in report.objects)
