@@ -87,7 +87,7 @@ class Dashboard(pn.viewable.Viewer):
             preset=lambda: self.inputs.base_preset,
         )
         self.passage = PassageView(self.whatif, companions=self.runs.depth_companions)
-        self.longterm = LongTermView(self.scenario.longterm)
+        self.longterm = LongTermView(self.scenario.longterm, self.scenario.site)
         self.ground = GroundView()
         self.runs.views = (self.passage, self.longterm, self.ground)
         self.study = StudyView(scenario_source=lambda: self.scenario.copy())
@@ -205,5 +205,5 @@ def serve_session() -> Dashboard:
 
 
 if pn.state.served:
-    pn.extension(notifications=False)
+    pn.extension("tabulator", notifications=False)  # the long-term tab's layer table
     serve_session()

@@ -33,13 +33,15 @@ GROUP_TITLES = {
     "soil": "Soil",
     "tunnel": "Lining",
     "vehicle": "Vehicle",
+    "site": "Site profile",
     "longterm": "Long-term settlement",
     "numerics": "Numerics",
 }
 """Collapsible groups in display order: section → title."""
 
-HIDDEN = {"irregularity.profile_csv"}
-"""Not offered as a control: a measured profile is a server-side file; set it in a scenario file."""
+HIDDEN = {"irregularity.profile_csv", "site.layers"}
+"""Not offered as a control: a measured profile is a server-side file, set in a scenario file;
+the site's layers are edited in the long-term tab's layer table (:mod:`dashboard.site_view`)."""
 
 
 def _lazy_card(members: list[pn.viewable.Viewable], **params) -> pn.Card:

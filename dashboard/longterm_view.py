@@ -1,13 +1,15 @@
 """The "Long-term settlement" view: pure plot functions Results → HoloViews, a calibration
-panel, and :class:`LongTermView`, the tab that shows them with the law's statement.
+panel, and :class:`LongTermView`, the tab that shows them with the laws' statements.
 
-The plots read ``Results.longterm`` (docs/model.md §10): settlement at the invert against years of
-service (log axis), the permanent strain and the stress ratio q_d/σ_s against depth with the
-depth that holds 90 % of the settlement, and the fit of a cyclic-triaxial calibration. The
-:class:`CalibrationPanel` uploads a triaxial CSV
-(``model.longterm.calibration.parse_triaxial_csv``), shows the fit and writes the fitted a, b, m
-into a :class:`~model.params.LongTerm` (Li & Selig, soil class "user"). Units on screen: mm, %,
-kPa.
+The plots read ``Results.longterm`` (docs/model.md §10, §14, §15): settlement at the invert
+against years of service as its plastic and consolidation parts (log axis,
+:mod:`dashboard.site_view`), the permanent strain and the stress ratio q_d/σ_s against depth with
+the depth that holds 90 % of the settlement and the layer boundaries, the excess pore pressure
+against depth, and the fit of a cyclic-triaxial calibration. The :class:`CalibrationPanel`
+uploads a triaxial CSV (``model.longterm.calibration.parse_triaxial_csv``), shows the fits and
+writes the fitted a, b, m (Li & Selig, soil class "user") and, with a pore-pressure column,
+a_u, b_u, m_u (the power law) into a chosen layer of the :class:`~model.params.Site`. Units on
+screen: mm, %, kPa.
 """
 
 from __future__ import annotations
@@ -19,8 +21,20 @@ import param
 
 from dashboard.plot_panes import PlotPanes, PlotsView
 from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
-from model.longterm.calibration import TriaxialData, fit_strain_law, parse_triaxial_csv
-from model.params import LongTerm
+from dashboard.site_view import (
+    DEFAULT_YEARS,
+    SITE_PLOTS,
+    YEAR_CHOICES,
+    LayerTable,
+    layer_boundary_lines,
+)
+from model.longterm.calibration import (
+    TriaxialData,
+    fit_pore_pressure_law,
+    fit_strain_law,
+    parse_triaxial_csv,
+)
+from model.params import Layer, LongTerm, Site
 from model.pipeline import Results
 
 KPA = 1e-3  # Pa → kPa
@@ -36,18 +50,6 @@ def _depth90_line(results: Results) -> hv.HLine:
     )
 
 
-def settlement_time_plot(results: Results) -> hv.Curve:
-    """Settlement at the invert against years of service, log time axis."""
-    lt = results.longterm
-    curve = hv.Curve(
-        (lt.years, lt.settlement_m * MM),
-        kdims=[hv.Dimension("years", label="Service time", unit="years")],
-        vdims=[hv.Dimension("settlement", label="Settlement at the invert", unit="mm")],
-        label="Long-term settlement",
-    )
-    return curve.opts(title="Long-term settlement", logx=True, line_width=2, **PLOT_OPTIONS)
-
-
 def strain_depth_plot(results: Results) -> hv.Overlay:
     """Permanent strain after the service time against depth, 90 % depth marked."""
     lt = results.longterm
@@ -55,7 +57,7 @@ def strain_depth_plot(results: Results) -> hv.Overlay:
     curve = hv.Curve(
         (lt.strain_percent, lt.depth_m), kdims=[strain], vdims=[DEPTH], label="ε_p"
     ).opts(line_width=2)
-    return (curve * _depth90_line(results)).opts(
+    return (curve * _depth90_line(results) * layer_boundary_lines(results)).opts(
         title=f"Permanent strain after {results.scenario.longterm.years:g} years",
         invert_yaxis=True,
         legend_position="bottom_right",
@@ -78,7 +80,7 @@ def stress_ratio_depth_plot(results: Results) -> hv.Overlay:
         vdims=[DEPTH, deviator, strength],
         label="q_d/σ_s",
     ).opts(line_width=2)
-    layers = curve * _depth90_line(results)
+    layers = curve * _depth90_line(results) * layer_boundary_lines(results)
     if lt.stress_ratio.max() > 0.5:
         layers = layers * hv.VLine(1.0, label="failure (laws not valid)").opts(color="red")
     return layers.opts(
@@ -90,15 +92,20 @@ def stress_ratio_depth_plot(results: Results) -> hv.Overlay:
 
 
 def law_statement(results: Results) -> str:
-    """Markdown naming the law, parameters and traffic, with the key numbers and warnings."""
+    """Markdown naming the laws, parameters and traffic, with the key numbers and warnings."""
     lt = results.longterm
     depth90 = f"{lt.depth90_m:.3g} m" if np.isfinite(lt.depth90_m) else "–"
     lines = [
         f"**Law:** {lt.statement}",
+        f"**{lt.pore_pressure_statement.partition(':')[0]}:**"
+        f"{lt.pore_pressure_statement.partition(':')[2]}",
         f"**Settlement at the invert after {results.scenario.longterm.years:g} years:** "
-        f"{lt.settlement_m[-1] * MM:.3g} mm; 90 % of it within {depth90} below the invert; "
-        f"q_d at the invert {lt.deviator_Pa[0] * KPA:.3g} kPa "
-        f"(σ_s = {lt.strength_Pa[0] * KPA:.3g} kPa).",
+        f"{lt.settlement_m[-1] * MM:.3g} mm = {lt.plastic_settlement_m[-1] * MM:.3g} mm plastic "
+        f"+ {lt.consolidation_settlement_m[-1] * MM:.3g} mm consolidation; 90 % of it within "
+        f"{depth90} below the invert; q_d at the invert {lt.deviator_Pa[0] * KPA:.3g} kPa "
+        f"(σ_s = {lt.strength_Pa[0] * KPA:.3g} kPa); largest excess pore pressure "
+        f"{lt.excess_pore_pressure_Pa[-1].max() * KPA:.3g} kPa (generated "
+        f"{lt.generated_pore_pressure_Pa[-1].max() * KPA:.3g} kPa).",
     ]
     lines += [f"⚠ {warning}" for warning in lt.warnings]
     return "\n\n".join(lines)
@@ -137,7 +144,7 @@ def calibration_plot(data: TriaxialData, fit: dict[str, float]) -> hv.Overlay:
 
 
 def fit_summary(fit: dict[str, float]) -> str:
-    """Markdown of the fitted parameters with their standard errors."""
+    """Markdown of the fitted strain-law parameters with their standard errors."""
     return (
         f"a = {fit['a']:.4g} ± {fit['a_se']:.2g} %, b = {fit['b']:.4g} ± {fit['b_se']:.2g}, "
         f"m = {fit['m']:.4g} ± {fit['m_se']:.2g} (± one standard error; {fit['n_points']} "
@@ -145,76 +152,152 @@ def fit_summary(fit: dict[str, float]) -> str:
     )
 
 
-def apply_fit(longterm: LongTerm, fit: dict[str, float]) -> None:
-    """Use fitted a, b, m: Li & Selig's law with soil class 'user' (one update, one event).
+def pore_fit_summary(fit: dict[str, float]) -> str:
+    """Markdown of the fitted power law of the pore-pressure ratio, with standard errors."""
+    return (
+        f"a_u = {fit['a_u']:.4g} ± {fit['a_u_se']:.2g}, b_u = {fit['b_u']:.4g} ± "
+        f"{fit['b_u_se']:.2g}, m_u = {fit['m_u']:.4g} ± {fit['m_u_se']:.2g} (residual sd of "
+        f"ln r_u {fit['residual_std']:.2g})"
+    )
 
-    All or nothing: a fitted value outside its parameter's bounds (e.g. b ≤ 0 from strains that
-    do not grow with N) raises ValueError and leaves ``longterm`` unchanged.
-    """
-    values = {"law": "li_selig", "soil_class": "user", "a": fit["a"], "b": fit["b"], "m": fit["m"]}
-    before = {name: getattr(longterm, name) for name in values}
+
+def _update_all_or_nothing(updates: list[tuple[param.Parameterized, dict]]) -> None:
+    """Set every object's values, or none of them (one event per object)."""
+    before = [(obj, {name: getattr(obj, name) for name in values}) for obj, values in updates]
     try:
-        longterm.param.update(**values)
+        for obj, values in updates:
+            obj.param.update(**values)
     except ValueError:
-        longterm.param.update(**before)
+        for obj, values in before:
+            obj.param.update(**values)
         raise
 
 
+def apply_fit(longterm: LongTerm, layer: Layer, fit: dict[str, float]) -> None:
+    """Use fitted a, b, m in ``layer``: Li & Selig's law, soil class 'user'.
+
+    All or nothing: a value outside its parameter's bounds raises ValueError and leaves both
+    objects unchanged.
+    """
+    _update_all_or_nothing(
+        [
+            (layer, {"soil_class": "user", "a": fit["a"], "b": fit["b"], "m": fit["m"]}),
+            (longterm, {"law": "li_selig"}),
+        ]
+    )
+
+
+def apply_pore_fit(longterm: LongTerm, layer: Layer, fit: dict[str, float]) -> None:
+    """Use fitted a_u, b_u, m_u in ``layer`` and the power law of the pore pressure (all or
+    nothing, as :func:`apply_fit`)."""
+    _update_all_or_nothing(
+        [
+            (layer, {name: fit[name] for name in ("a_u", "b_u", "m_u")}),
+            (longterm, {"pore_pressure_law": "power"}),
+        ]
+    )
+
+
 LONGTERM_PLOTS = (
-    PlotSpec("longterm_settlement", "longterm", settlement_time_plot),
+    PlotSpec("longterm_settlement", "longterm", SITE_PLOTS[0].draw),
     PlotSpec("longterm_strain", "longterm", strain_depth_plot),
     PlotSpec("longterm_stress_ratio", "longterm", stress_ratio_depth_plot),
+    *SITE_PLOTS[1:],
 )
 """The long-term plots with the stage they read, in the form of ``dashboard.plots.PLOTS``."""
+PORE_PRESSURE_PLOT = "longterm_pore_pressure"
+"""The plot drawn at the years the view's year choice gives."""
 
 
 class CalibrationPanel(pn.viewable.Viewer):
-    """Upload a cyclic-triaxial CSV, see the fit, and apply a, b, m to a LongTerm object."""
+    """Upload a cyclic-triaxial CSV, see the fits, and apply them to a layer of the site."""
 
-    longterm = param.ClassSelector(class_=LongTerm, doc="Parameters that receive the fit.")
+    site = param.ClassSelector(class_=Site, doc="The site whose layer receives the fit.")
+    longterm = param.ClassSelector(class_=LongTerm, doc="Receives the laws of the fits.")
     data = param.ClassSelector(class_=TriaxialData, allow_None=True, doc="Last good upload.")
-    fit = param.Dict(default=None, allow_None=True, doc="Fit of the last good upload.")
+    fit = param.Dict(default=None, allow_None=True, doc="Strain-law fit of the last upload.")
+    pore_fit = param.Dict(default=None, allow_None=True, doc="Pore-pressure fit, if any.")
 
     def __init__(self, **params):
+        params.setdefault("site", Site())
         params.setdefault("longterm", LongTerm())
         super().__init__(**params)
         self.file_input = pn.widgets.FileInput(accept=".csv,.txt")
+        self.layer_select = pn.widgets.Select(label="Layer that receives the fit", width=260)
+        self._follow_layers()
+        self.site.param.watch(lambda event: self._follow_layers(), "layers")
         self.apply_button = pn.widgets.Button(
             label="Use fitted a, b, m (Li & Selig, user)", color="primary", disabled=True
         )
+        self.apply_pore_button = pn.widgets.Button(
+            label="Use fitted a_u, b_u, m_u (power law)", color="primary", disabled=True
+        )
         self.message = pn.pane.Markdown(
-            "Columns: N, strain (%), q_d (kPa), σ_s (kPa); lines starting with # are comments."
+            "The header names the columns with their units, in any order: n_cycles, "
+            "strain_percent, deviator_kPa, strength_kPa, and optionally pore_pressure_kPa with "
+            "effective_stress_kPa (or pore_pressure_ratio); lines starting with # are comments."
         )
         self.plot = pn.pane.HoloViews(None, sizing_mode="stretch_width")
         self.file_input.param.watch(self._on_upload, "value")
         self.apply_button.on_click(lambda event: self.apply())
+        self.apply_pore_button.on_click(lambda event: self.apply_pore())
+
+    @property
+    def layer(self) -> Layer:
+        """The chosen layer."""
+        return self.site.layers[self.layer_select.value or 0]
+
+    def _follow_layers(self) -> None:
+        """The layer choice lists the site's layers (the first if the chosen one is gone)."""
+        options = {f"{i + 1}: {layer.name}": i for i, layer in enumerate(self.site.layers)}
+        value = self.layer_select.value if self.layer_select.value in options.values() else 0
+        self.layer_select.param.update(options=options, value=value)
 
     def load_text(self, text: str, source: str) -> None:
-        """Parse and fit CSV text; show the fit, or the reason it was refused."""
+        """Parse and fit CSV text; show the fits, or the reason they were refused."""
+        pore_fit = None
         try:
             data = parse_triaxial_csv(text, source)
             fit = fit_strain_law(data.n_cycles, data.strain_percent, data.stress_ratio)
+            if data.pore_pressure_ratio is not None:
+                pore_fit = fit_pore_pressure_law(
+                    data.n_cycles, data.pore_pressure_ratio, data.stress_ratio
+                )
         except ValueError as error:
-            self.param.update(data=None, fit=None)
+            self.param.update(data=None, fit=None, pore_fit=None)
             self.message.object = f"**Refused:** {error}"
             self.plot.object = None
-            self.apply_button.disabled = True
+            self.apply_button.disabled = self.apply_pore_button.disabled = True
             return
-        self.param.update(data=data, fit=fit)
+        self.param.update(data=data, fit=fit, pore_fit=pore_fit)
         self.message.object = f"**Fit of {source}:** {fit_summary(fit)}"
+        if pore_fit is not None:
+            self.message.object += f"\n\n**Pore pressure:** {pore_fit_summary(pore_fit)}"
         self.plot.object = calibration_plot(data, fit)
         self.apply_button.disabled = False
+        self.apply_pore_button.disabled = pore_fit is None
 
     def apply(self) -> None:
-        """Write the current fit into ``longterm``."""
+        """Write the strain-law fit into the chosen layer."""
         if self.fit is None:
             return
+        self._apply(apply_fit, self.fit, fit_summary)
+
+    def apply_pore(self) -> None:
+        """Write the pore-pressure fit into the chosen layer."""
+        if self.pore_fit is None:
+            return
+        self._apply(apply_pore_fit, self.pore_fit, pore_fit_summary)
+
+    def _apply(self, apply, fit, summary) -> None:
+        """Apply a fit to the chosen layer and say so (or why not)."""
+        layer = self.layer
         try:
-            apply_fit(self.longterm, self.fit)
+            apply(self.longterm, layer, fit)
         except ValueError as error:
             self.message.object += f"\n\n**Not applied:** {error}"
             return
-        self.message.object += f"\n\nApplied to the long-term settlement: {fit_summary(self.fit)}"
+        self.message.object += f"\n\nApplied to layer {layer.name!r}: {summary(fit)}"
 
     def _on_upload(self, event) -> None:
         """FileInput callback: decode the bytes and load them."""
@@ -227,32 +310,53 @@ class CalibrationPanel(pn.viewable.Viewer):
             "#### Calibration from a cyclic triaxial test",
             self.file_input,
             self.message,
-            self.apply_button,
+            self.layer_select,
+            pn.Row(self.apply_button, self.apply_pore_button),
             self.plot,
         )
 
 
 class LongTermView(PlotsView):
-    """The long-term tab of one session: the law that produced the numbers, the long-term
-    plots of the results on screen, and the calibration of the strain law.
+    """The long-term tab of one session: the laws that produced the numbers, the site's layer
+    table, the long-term plots of the results on screen, and the calibration of the laws.
 
     Parameters
     ----------
     longterm : LongTerm
-        The session's long-term parameters; the calibration writes its fit into them.
+        The session's long-term parameters; the calibration sets the laws of its fits.
+    site : Site
+        The session's site profile; the layer table edits it, the calibration writes its fits
+        into one of its layers.
     """
 
-    def __init__(self, longterm: LongTerm) -> None:
+    def __init__(self, longterm: LongTerm, site: Site) -> None:
         super().__init__()
         self.law_statement = pn.pane.Markdown("", sizing_mode="stretch_width")
-        self.calibration = CalibrationPanel(longterm=longterm)
-        self.plots = PlotPanes(LONGTERM_PLOTS)
+        self.layers = LayerTable(site=site)
+        self.calibration = CalibrationPanel(site=site, longterm=longterm)
+        self.years = pn.widgets.MultiChoice(
+            label="Excess pore pressure shown after (years; and the last year)",
+            options=list(YEAR_CHOICES),
+            value=list(DEFAULT_YEARS),
+            sizing_mode="stretch_width",
+        )
+        self.plots = PlotPanes(LONGTERM_PLOTS, draw_arguments=self._draw_arguments)
+        self._results: Results | None = None
+        self.years.param.watch(self._on_years, "value")
         self._layout = pn.Column(
             self.law_statement,
+            pn.Card(
+                self.layers,
+                title="Site profile: layers",
+                collapsed=False,
+                sizing_mode="stretch_width",
+                css_classes=["site-layers"],
+            ),
             self.plots.flexbox(),
+            self.years,
             pn.Card(
                 self.calibration,
-                title="Calibrate the strain law",
+                title="Calibrate the strain and pore-pressure laws",
                 collapsed=True,
                 sizing_mode="stretch_width",
             ),
@@ -263,7 +367,17 @@ class LongTermView(PlotsView):
     def __panel__(self) -> pn.viewable.Viewable:
         return self._layout
 
+    def _draw_arguments(self, spec: PlotSpec) -> dict:
+        """The chosen years for the pore-pressure plot; nothing for the others."""
+        return {"years": tuple(self.years.value)} if spec.key == PORE_PRESSURE_PLOT else {}
+
+    def _on_years(self, event) -> None:
+        """Another choice of years: a new pore-pressure plot (its set of curves changed)."""
+        if self._results is not None:
+            self.plots.redraw(PORE_PRESSURE_PLOT, self._results)
+
     def show(self, results: Results, redrawn: set[str]) -> None:
-        """The plots of the ``redrawn`` stages and the law's statement follow ``results``."""
+        """The plots of the ``redrawn`` stages and the laws' statement follow ``results``."""
+        self._results = results
         self.plots.show(results, redrawn)
         self.law_statement.object = law_statement(results)

@@ -146,6 +146,13 @@ class PlotPanes:
         for spec in self.specs:
             self._new_plot(spec, results)
 
+    def redraw(self, key: str, results: Results) -> None:
+        """A new plot ``key`` of ``results`` in place of the drawn one (its set of curves
+        changed), if it is drawn."""
+        for spec in self.specs:
+            if spec.key == key and key in self.streams:
+                self._new_plot(spec, results)
+
     def send(self, key: str, results: Results) -> None:
         """Draw the plot ``key`` again, of ``results`` (if it exists)."""
         stream = self.streams.get(key)

@@ -26,6 +26,7 @@ from panel.io.state import set_curdoc
 from dashboard import plots
 from dashboard.ground_view import GROUND_PLOTS, ground_statement
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
+from dashboard.site_view import layers_html
 from model.pipeline import Results
 
 REPORT_TITLE = "tunnelsettle report"
@@ -50,6 +51,13 @@ ITEMS_CSS = """
 .item .value { font-size: 18px; font-weight: 600; }
 """
 """Style of :func:`items_html` blocks, shared by the dashboard and the report."""
+
+LAYERS_CSS = """
+table.layers { border-collapse: collapse; font-size: 12px; display: block; overflow-x: auto; }
+table.layers th, table.layers td { border: 1px solid #d0d7de; padding: 2px 6px; }
+table.layers th { background: #f6f8fa; font-weight: 600; }
+"""
+"""Style of the report's layer table (:func:`dashboard.site_view.layers_html`)."""
 
 
 def package_version() -> str:
@@ -124,6 +132,12 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
                 sizing_mode="stretch_width",
             ),
         ]  # fmt: skip
+    site = pn.pane.HTML(
+        "<h4>Site profile</h4>" + layers_html(scenario.site),
+        stylesheets=[LAYERS_CSS],
+        sizing_mode="stretch_width",
+        css_classes=["report-layers"],
+    )
     scenario_block = pn.pane.HTML(
         "<h3>Scenario</h3><details open><summary>All inputs (JSON, SI units except "
         f'km/h)</summary><pre class="scenario-json">{html.escape(results.scenario_json)}'
@@ -131,7 +145,7 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
         sizing_mode="stretch_width",
     )
     return pn.Column(
-        header, figures, longterm, *ground, scenario_block, sizing_mode="stretch_width"
+        header, figures, longterm, site, *ground, scenario_block, sizing_mode="stretch_width"
     )
 
 

@@ -98,8 +98,9 @@ def describe_change(path: str, value: Any) -> str:
     ----------
     path : str
         Dotted parameter path, ``"section.parameter"`` (e.g. ``"train.speed_kmh"``).
-    value : bool, int, float, str or None
-        The parameter's value in the model's units (SI, km/h for the speed).
+    value : bool, int, float, str, None or list
+        The parameter's value in the model's units (SI, km/h for the speed); the site's layers
+        as a list of records, named by their layers' names.
 
     Returns
     -------
@@ -114,6 +115,8 @@ def describe_change(path: str, value: Any) -> str:
         return f"{label} automatic"
     if isinstance(value, bool):
         return f"{label}: {'yes' if value else 'no'}"
+    if isinstance(value, list):  # the site's layers, as records
+        return f"{label} {', '.join(str(layer.get('name', '?')) for layer in value)}"
     if isinstance(value, int | float):
         unit, factor = _display_unit(unit, value)
         space = "" if unit in ("", "°", "%") else " "
@@ -173,6 +176,8 @@ COMPARED = (
     ComparedQuantity("peak_disp_11m_m", "Peak displacement 11 m below", "mm", 1e3),
     ComparedQuantity("peak_disp_deepest_m", "Peak displacement at the deepest depth", "mm", 1e3),
     ComparedQuantity("longterm_settlement_m", "Long-term settlement", "mm", 1e3),
+    ComparedQuantity("longterm_plastic_settlement_m", "… plastic part", "mm", 1e3),
+    ComparedQuantity("longterm_consolidation_settlement_m", "… consolidation part", "mm", 1e3),
 )
 """Key numbers compared, in column order; a quantity absent from every summary is left out
 (the long-term settlement exists only once the pipeline computes it)."""

@@ -5,7 +5,8 @@ The sub-packages follow the chain of the computation (docs/model.md):
 - ``params``: every input, with its bounds, unit and default (:class:`Scenario`);
 - ``track``: train → track, the vehicle–track simulation and the force into the invert (§1–6);
 - ``soil``: load → soil, the tunnel–soil response and stresses under the invert (§7–9);
-- ``longterm``: stresses → permanent settlement over years of traffic (§10);
+- ``longterm``: stresses → settlement over years of traffic, plastic and consolidation, in the
+  layered site (§10, §14, §15);
 - ``pipeline``: :func:`run`, the one place the stages are chained, with their cache;
 - ``study``: many runs on Dask, sweeps and Monte-Carlo bands (§11);
 - ``fe``: the OpenSeesPy finite-element check of the section (§12);
@@ -22,6 +23,9 @@ import importlib
 PUBLIC_API = {
     "Scenario": "model.params",
     "ScenarioError": "model.params",
+    "Site": "model.params",
+    "Layer": "model.params",
+    "load_borehole_csv": "model.params.borehole",
     "run": "model.pipeline",
     "Results": "model.pipeline",
     "StageCache": "model.pipeline",
@@ -36,6 +40,8 @@ PUBLIC_API = {
     "halfspace_point_response": "model.soil.halfspace",
     "long_term_settlement": "model.longterm.settlement",
     "fit_strain_law": "model.longterm.calibration",
+    "fit_pore_pressure_law": "model.longterm.calibration",
+    "solve_consolidation": "model.longterm.consolidation",
     "load_triaxial_csv": "model.longterm.calibration",
     "run_study": "model.study.execution",
     "aggregate": "model.study.tables",

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from model.params import Scenario
+from model.params.borehole import load_borehole_csv
 from model.pipeline import STAGES, Results, SimulationError, run
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.soil.response import COMPARISON_DEPTH_M
@@ -32,7 +33,8 @@ PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
 
 
 def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add ``--preset`` / ``--scenario`` and the repeatable ``--set`` (read by load_scenario)."""
+    """Add ``--preset`` / ``--scenario``, the repeatable ``--set`` and ``--borehole`` (read by
+    load_scenario)."""
     source = parser.add_mutually_exclusive_group()
     source.add_argument(
         "--preset",
@@ -48,6 +50,12 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         default=[],
         metavar="SECTION.PARAM=VALUE",
         help="override one parameter, e.g. train.speed_kmh=60 (repeatable)",
+    )
+    parser.add_argument(
+        "--borehole",
+        type=Path,
+        help="site layers from a borehole CSV (one row a layer, the header names the columns "
+        "and units: model.params.borehole)",
     )
 
 
@@ -69,8 +77,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def load_scenario(args: argparse.Namespace) -> Scenario:
-    """Scenario from the preset or file, with the ``--set`` overrides applied."""
+    """Scenario from the preset or file, with the borehole's layers and the ``--set``
+    overrides applied."""
     scenario = Scenario.from_file(args.scenario) if args.scenario else Scenario.preset(args.preset)
+    if args.borehole:
+        scenario.site.layers = load_borehole_csv(args.borehole)
     for item in args.overrides:
         path, sep, value = item.partition("=")
         if not sep:
@@ -129,8 +140,8 @@ def prepare_output_folder(out: Path, force: bool) -> None:
 
 def write_results(results: Results, out: Path) -> list[Path]:
     """Write time histories, spectra, the depth profile, the long-term settlement against time and
-    per depth, and (half-space ground) the ground-surface levels and peaks (CSV), scenario and
-    summary (JSON)."""
+    per depth, the pore pressures against time at each depth, and (half-space ground) the
+    ground-surface levels and peaks (CSV), scenario and summary (JSON)."""
     out.mkdir(parents=True, exist_ok=True)
     vt, load, soil, lt = results.vehicle_track, results.load, results.soil, results.longterm
     tables = {
@@ -153,9 +164,16 @@ def write_results(results: Results, out: Path) -> list[Path]:
             "t_s": soil.t_s,
             **{f"disp_{d:g}m_m": row for d, row in zip(soil.depth_m, soil.disp_m, strict=True)},
         },
-        "longterm_settlement.csv": {"years": lt.years, "settlement_m": lt.settlement_m},
+        "longterm_settlement.csv": {
+            "years": lt.years,
+            "settlement_m": lt.settlement_m,
+            "plastic_settlement_m": lt.plastic_settlement_m,
+            "consolidation_settlement_m": lt.consolidation_settlement_m,
+        },
         "longterm_depth.csv": {
             "depth_m": lt.depth_m,
+            "depth_below_ground_m": lt.depth_below_ground_m,
+            "layer_index": lt.layer_index,
             "deviator_Pa": lt.deviator_Pa,
             "strength_Pa": lt.strength_Pa,
             "stress_ratio": lt.stress_ratio,
@@ -164,6 +182,25 @@ def write_results(results: Results, out: Path) -> list[Path]:
             "cycles_per_train": lt.cycles_per_train,
             "n_cycles": lt.n_cycles,
             "strain_percent": lt.strain_percent,
+            "consolidation_strain_percent": lt.consolidation_strain_percent,
+            "compressibility_per_Pa": lt.compressibility_per_Pa,
+            "hydraulic_conductivity_m_per_s": lt.hydraulic_conductivity_m_per_s,
+            "consolidation_coefficient_m2_per_s": lt.consolidation_coefficient_m2_per_s,
+            "generated_pore_pressure_Pa": lt.generated_pore_pressure_Pa[-1],
+            "excess_pore_pressure_Pa": lt.excess_pore_pressure_Pa[-1],
+        },
+        **{
+            f"longterm_{name}.csv": {
+                "years": lt.years,
+                **{
+                    f"{name}_{d:g}m_Pa": column
+                    for d, column in zip(lt.depth_m, values.T, strict=True)
+                },
+            }
+            for name, values in (
+                ("generated_pore_pressure", lt.generated_pore_pressure_Pa),
+                ("excess_pore_pressure", lt.excess_pore_pressure_Pa),
+            )
         },
     }
     ground = results.ground
@@ -200,6 +237,7 @@ def write_results(results: Results, out: Path) -> list[Path]:
     summary = {
         "summary": results.summary(),
         "longterm_law": lt.statement,
+        "longterm_pore_pressure": lt.pore_pressure_statement,
         "warnings": results.warnings,
         "stage_seconds": results.stage_seconds,
     }

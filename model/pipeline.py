@@ -143,6 +143,16 @@ class Results:
             "deviator_invert_Pa": float(self.longterm.deviator_Pa[0]),
             "strength_invert_Pa": float(self.longterm.strength_Pa[0]),
             "longterm_settlement_m": float(self.longterm.settlement_m[-1]),
+            "longterm_plastic_settlement_m": float(self.longterm.plastic_settlement_m[-1]),
+            "longterm_consolidation_settlement_m": float(
+                self.longterm.consolidation_settlement_m[-1]
+            ),
+            "longterm_generated_pore_pressure_max_Pa": float(
+                np.max(self.longterm.generated_pore_pressure_Pa[-1])
+            ),
+            "longterm_excess_pore_pressure_max_Pa": float(
+                np.max(self.longterm.excess_pore_pressure_Pa[-1])
+            ),
             "longterm_depth90_m": self.longterm.depth90_m,
             **(ground_summary(self.ground) if self.ground is not None else {}),
         }
@@ -294,6 +304,7 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     longterm = {
         "upstream": soil,
         "longterm": data["longterm"],
+        "site": data["site"],
         "tunnel": {name: data["tunnel"][name] for name in LONGTERM_TUNNEL},
     }
     # the transfer functions: the soil stage's inputs but the load, whose record's length and

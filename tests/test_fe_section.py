@@ -153,7 +153,7 @@ def test_very_strong_soil_leaves_no_residual():
     passages is zero (static equilibrium returns to the initial state; tolerance 1e-9 m, i.e.
     1e-6 of the 1 mm peak, far above the solver's ~1e-13 m), and both passages peak alike."""
     scenario = Scenario.paper()
-    scenario.longterm.undrained_strength = 1e9
+    scenario.site.layers[0].undrained_strength = 1e9
     result = run_fe(
         scenario, "mohr_coulomb", passages=2, mesh=PLASTIC_MESH, load=(hann_pulse(), DT_S)
     )

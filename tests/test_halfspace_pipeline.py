@@ -19,6 +19,10 @@ def half_space(scenario: Scenario, axis_depth: float = 15.0) -> Scenario:
     scenario.tunnel.model = "2.5d"
     scenario.tunnel.ground = "half_space"
     scenario.tunnel.axis_depth = axis_depth
+    # the long-term column must lie within the site profile (deep axes need a thicker layer)
+    bottom = axis_depth + scenario.tunnel.ring_radius + scenario.numerics.max_depth
+    shortfall = bottom - sum(layer.thickness for layer in scenario.site.layers)
+    scenario.site.layers[-1].thickness += max(shortfall + 1.0, 0.0)
     return scenario
 
 

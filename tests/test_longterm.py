@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from model.cli import main
-from model.longterm.calibration import fit_strain_law, load_triaxial_csv
+from model.longterm.calibration import fit_strain_law, load_triaxial_csv, parse_triaxial_csv
 from model.longterm.cycles import range_weighted_cycles
 from model.longterm.geostatic import check_longterm_inputs, static_state
 from model.longterm.settlement import (
@@ -24,7 +24,7 @@ from model.longterm.settlement import (
     trapezoid_thickness,
 )
 from model.longterm.strain_laws import permanent_strain_percent
-from model.params import DATA_DIR, LongTerm, Scenario, Soil, Tunnel
+from model.params import DATA_DIR, Layer, Scenario, Site, Soil, Tunnel
 from model.pipeline import STAGES, StageCache, run
 from model.soil import stresses
 from model.soil.response import kernel_sample_bins, soil_response
@@ -371,10 +371,11 @@ def test_chai_miura_and_monismith_forms():
 def test_settlement_grows_as_n_to_the_b(results):
     """Doubling the traffic doubles N at every depth: S scales by 2^b exactly (rounding)."""
     scenario = results.scenario
+    scenario.longterm.pore_pressure_law = "none"
     base = long_term_settlement(results.stress, scenario)
     scenario.longterm.trains_per_day *= 2
     doubled = long_term_settlement(results.stress, scenario)
-    b = scenario.longterm.law_parameters()[1]
+    b = scenario.site.layers[0].law_parameters()[1]
     np.testing.assert_allclose(doubled.settlement_m, base.settlement_m * 2**b, rtol=1e-12)
     # the curve in time: S(t) ∝ t^b
     ratio = base.settlement_m / base.settlement_m[-1]
@@ -386,12 +387,13 @@ def test_settlement_scales_as_the_load_to_the_m(results):
     (rainflow counts are range ratios, unchanged); exact to rounding (rel 1e-9)."""
     scenario = results.scenario
     scenario.longterm.cycles_per_train = "rainflow"
+    scenario.longterm.pore_pressure_law = "none"
     load, dt = results.load.line_load_N_per_m, results.load.t_s[1] - results.load.t_s[0]
     base = stress_response(load, dt, results.soil.depth_m, scenario)
     scaled = stress_response(2.0 * load, dt, results.soil.depth_m, scenario)
     np.testing.assert_allclose(scaled.deviator_Pa, 2.0 * base.deviator_Pa, rtol=1e-9)
     np.testing.assert_allclose(scaled.rainflow_cycles, base.rainflow_cycles, rtol=1e-9)
-    m = scenario.longterm.law_parameters()[2]
+    m = scenario.site.layers[0].law_parameters()[2]
     s_base = long_term_settlement(base, scenario).settlement_m
     s_scaled = long_term_settlement(scaled, scenario).settlement_m
     np.testing.assert_allclose(s_scaled, s_base * 2**m, rtol=1e-9)
@@ -406,15 +408,16 @@ def test_zero_load_gives_zero_settlement(results, law):
     assert np.all(stress.deviator_Pa == 0.0) and np.all(stress.rainflow_cycles == 0.0)
     result = long_term_settlement(stress, scenario)
     assert np.all(result.settlement_m == 0.0)
+    assert np.all(result.generated_pore_pressure_Pa == 0.0)
     assert math.isnan(result.depth90_m)
 
 
 def test_deeper_water_table_raises_effective_stress_and_lowers_settlement(results):
     scenario = results.scenario
-    shallow = static_state(results.soil.depth_m, scenario.longterm, scenario.tunnel, scenario.soil)
+    shallow = static_state(results.soil.depth_m, scenario.site, scenario.tunnel)
     s_shallow = long_term_settlement(results.stress, scenario).settlement_m[-1]
-    scenario.longterm.water_table_depth = 10.0
-    deep = static_state(results.soil.depth_m, scenario.longterm, scenario.tunnel, scenario.soil)
+    scenario.site.water_table_depth = 10.0
+    deep = static_state(results.soil.depth_m, scenario.site, scenario.tunnel)
     s_deep = long_term_settlement(results.stress, scenario).settlement_m[-1]
     # below both water tables the difference is the pore pressure of 10 m of water
     np.testing.assert_allclose(
@@ -429,14 +432,14 @@ def test_static_state_by_hand():
     """Axis 15 m, a = 2.85 m, d = 0, ρ = 1800 kg/m³, water at the surface, φ′ = 30°:
     σ′_v0 = (1800 − 1000) · 9.81 · 17.85 = 140 086.8 Pa, K0 = 0.5, q_s = 70 043.4 Pa,
     c_u = 0.22 σ′_v0, σ_s = 2 c_u (exact arithmetic, rel 1e-12)."""
-    lt = LongTerm(friction_angle=30.0)
-    state = static_state([0.0], lt, Tunnel(), Soil())
+    site = Site(layers=[Layer(friction_angle=30.0)])
+    state = static_state([0.0], site, Tunnel())
     assert Tunnel().ring_radius == pytest.approx(2.85)
     assert state.vertical_effective_stress_Pa[0] == pytest.approx(140086.8, rel=1e-12)
     assert state.static_deviator_Pa[0] == pytest.approx(70043.4, rel=1e-12)
     assert state.strength_Pa[0] == pytest.approx(2 * 0.22 * 140086.8, rel=1e-12)
-    lt.undrained_strength = 30e3
-    assert static_state([0.0, 5.0], lt, Tunnel(), Soil()).strength_Pa.tolist() == [60e3, 60e3]
+    site.layers[0].undrained_strength = 30e3
+    assert static_state([0.0, 5.0], site, Tunnel()).strength_Pa.tolist() == [60e3, 60e3]
 
 
 def test_trapezoid_cells_and_the_90_percent_depth():
@@ -488,7 +491,7 @@ def test_warning_names_the_depth_range_where_the_load_reaches_the_strength(resul
     scenario = results.scenario
     deviator = np.array([90e3, 70e3, 40e3, 20e3, 10e3, 80e3])
     depth = np.arange(6.0)
-    scenario.longterm.undrained_strength = 30e3  # σ_s = 60 kPa everywhere
+    scenario.site.layers[0].undrained_strength = 30e3  # σ_s = 60 kPa everywhere
     result = long_term_settlement(_stress(deviator, depth), scenario)
     assert len(result.warnings) == 1
     assert (
@@ -503,7 +506,7 @@ def test_statement_names_the_law_and_its_parameters(results):
     text = long_term_settlement(results.stress, scenario).statement
     assert "Li & Selig (1996) (soil class CH): a = 1.2 %, b = 0.18, m = 2.4" in text
     scenario.longterm.law = "chai_miura"
-    scenario.longterm.param.update(a=0.5, b=0.1, m=2.0, n=1.0)
+    scenario.site.layers[0].param.update(a=0.5, b=0.1, m=2.0, n=1.0)
     text = long_term_settlement(results.stress, scenario).statement
     assert "Chai & Miura (2002): a = 0.5 %, b = 0.1, m = 2, n = 1" in text
 
@@ -513,8 +516,16 @@ def test_changing_only_longterm_inputs_reruns_only_the_longterm_stage(cheap_scen
     cache = StageCache()
     scenario = cheap_scenario()
     first = run(scenario, cache=cache)
-    for path, value in (("trains_per_day", 400.0), ("law", "chai_miura"), ("years", 5.0)):
-        setattr(scenario.longterm, path, value)
+    changes = (
+        (scenario.longterm, "trains_per_day", 400.0),
+        (scenario.longterm, "law", "chai_miura"),
+        (scenario.longterm, "years", 5.0),
+        (scenario.longterm, "invert_drainage", "drained"),
+        (scenario.site, "water_table_depth", 2.0),
+        (scenario.site, "layers", [Layer(cu_ratio=0.3)]),
+    )
+    for section, path, value in changes:
+        setattr(section, path, value)
         again = run(scenario, cache=cache)
         assert again.cached_stages == STAGES[:-1], path
         assert again.stress.deviator_Pa is first.stress.deviator_Pa  # served, not recomputed
@@ -539,13 +550,15 @@ def test_impossible_static_states_are_refused_before_computing():
     with pytest.raises(ValueError, match=r"tunnel.axis_depth = 2 m .* outer radius 3 m"):
         check_longterm_inputs(scenario)
     scenario = Scenario.paper()
-    scenario.soil.density = 1000.0  # the lower bound: no effective stress
-    with pytest.raises(ValueError, match=r"soil.density = 1000 kg/m³"):
+    # 5 m of clay over a peat lighter than water: σ′_v0 = 88.3 + 382.8 − 518.5 kPa at the base
+    scenario.site.layers = [Layer(name="clay", thickness=5.0), Layer(name="peat", unit_weight=8e3)]
+    message = r"σ′_v0 = -47.4 kPa at 52.85 m .*'peat', site.layers\[1\]"
+    with pytest.raises(ValueError, match=message):
         run(scenario, cache=None)
     with pytest.raises(ValueError):
-        scenario.longterm.undrained_strength = 0.0
+        scenario.site.layers[0].undrained_strength = 0.0
     with pytest.raises(ValueError):
-        scenario.longterm.cu_ratio = -0.1
+        scenario.site.layers[0].cu_ratio = -0.1
 
 
 def test_command_line_writes_the_settlement_and_depth_tables(tmp_path):
@@ -555,10 +568,15 @@ def test_command_line_writes_the_settlement_and_depth_tables(tmp_path):
     )
     assert code == 0
     over_time = np.loadtxt(out / "longterm_settlement.csv", delimiter=",", skiprows=1)
-    assert over_time.shape == (N_YEARS, 2) and np.all(np.diff(over_time[:, 1]) > 0)
+    assert over_time.shape == (N_YEARS, 4) and np.all(np.diff(over_time[:, 1]) > 0)
+    # settlement = plastic + consolidation, to the 9 digits written
+    np.testing.assert_allclose(over_time[:, 1], over_time[:, 2] + over_time[:, 3], rtol=1e-8)
     header = (out / "longterm_depth.csv").read_text().splitlines()[0].split(",")
     assert header[0] == "depth_m" and "strain_percent" in header and "deviator_Pa" in header
+    assert "compressibility_per_Pa" in header and "excess_pore_pressure_Pa" in header
     assert np.loadtxt(out / "longterm_depth.csv", delimiter=",", skiprows=1).shape[0] == 11
+    excess = np.loadtxt(out / "longterm_excess_pore_pressure.csv", delimiter=",", skiprows=1)
+    assert excess.shape == (N_YEARS, 1 + 11)
 
 
 # ---- calibration -------------------------------------------------------------------------------
@@ -615,32 +633,70 @@ def _write(tmp_path, text, name="test.csv"):
 
 
 GOOD_ROWS = "1,0.1,10,50\n100,0.2,10,50\n1,0.3,20,50\n100,0.6,20,50\n"
+HEADER = "n_cycles,strain_percent,deviator_kPa,strength_kPa\n"
 
 
 def test_csv_with_comments_header_and_blank_lines_is_read(tmp_path):
-    path = _write(tmp_path, "# synthetic\n\nN,strain %,q_d,sigma_s\n" + GOOD_ROWS)
+    """Units in the header after an underscore, a space or in brackets; Pa read as Pa."""
+    path = _write(tmp_path, "# synthetic\n\nN,strain %,q_d (kPa),sigma_s [kPa]\n" + GOOD_ROWS)
     data = load_triaxial_csv(path)
     assert data.n_cycles.tolist() == [1, 100, 1, 100]
     np.testing.assert_allclose(data.stress_ratio, [0.2, 0.2, 0.4, 0.4])
-    assert data.source == "test.csv"
+    assert data.source == "test.csv" and data.pore_pressure_ratio is None
+    rows_pa = GOOD_ROWS.replace(",10,", ",1e4,").replace(",20,", ",2e4,")
+    in_pa = parse_triaxial_csv("n_cycles,strain_percent,deviator_Pa,strength_kPa\n" + rows_pa)
+    np.testing.assert_allclose(in_pa.deviator_kPa, [10, 10, 20, 20], rtol=1e-15)
+
+
+def test_columns_are_read_by_their_header_names():
+    """The same data with the columns in another order gives the same points (issue 30: they
+    were read by position, so swapped columns went unnoticed)."""
+    rows = [line.split(",") for line in GOOD_ROWS.splitlines()]
+    order = [2, 0, 3, 1]
+    names = HEADER.strip().split(",")
+    swapped = (
+        ",".join(names[i] for i in order)
+        + "\n"
+        + "".join(",".join(row[i] for i in order) + "\n" for row in rows)
+    )
+    a, b = parse_triaxial_csv(HEADER + GOOD_ROWS), parse_triaxial_csv(swapped)
+    for name in ("n_cycles", "strain_percent", "deviator_kPa", "strength_kPa"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
 
 
 @pytest.mark.parametrize(
     "text, message",
     [
         (
-            "N,e,q,s\n1,0.1,10\n1,x,10,50\n" + GOOD_ROWS,
-            r"bad\.csv: 2 bad row.*line 2: 3 values.*line 3",
+            HEADER + "1,0.1,10\n1,x,10,50\n" + GOOD_ROWS,
+            r"bad\.csv: 2 bad row.*line 2: 3 values.*line 3: strain_percent = 'x' is not",
         ),
-        ("N,e,q,s\n" + GOOD_ROWS + "5,-0.1,10,50\n", r"bad\.csv.*line 6: strain_percent = -0\.1"),
-        ("N,e,q,s\n1,0.1,10,50\n10,0.2,10,50\n20,0.3,20,50\n", r"3 points .* at least 4"),
-        ("1,0.1,10,50\n10,0.2,10,50\n20,0.3,10,50\n30,0.3,10,50\n", r"same stress ratio.*m is not"),
-        ("N,e,q,s\n", r"0 points"),
+        (HEADER + GOOD_ROWS + "5,-0.1,10,50\n", r"bad\.csv.*line 6: strain_percent = -0\.1"),
+        (HEADER + "1,0.1,10,50\n10,0.2,10,50\n20,0.3,20,50\n", r"3 points .* at least 4"),
+        (HEADER + "1,0.1,10,50\n10,0.2,10,50\n20,0.3,10,50\n30,0.3,10,50\n", r"same stress"),
+        (HEADER, r"0 points"),
+        (GOOD_ROWS, r"line 1 holds numbers, not a header"),
+        ("n_cycles,strain_percent,deviator_kPa\n" + GOOD_ROWS, r"line 1 has no column strength"),
+        ("n_cycles,strain_percent,q_d,strength_kPa\n", r"column 3 \('q_d'\): no unit"),
+        ("n_cycles,strain_kPa,deviator_kPa,strength_kPa\n", r"unit 'kpa' for strain_percent"),
+        (HEADER.strip() + ",comment\n", r"column 5: 'comment' is not a known column"),
+        (HEADER.strip() + ",u_kPa\n", r"pore_pressure_kPa but no effective_stress_kPa"),
+        ("n,cycles,strain_percent,deviator_kPa,strength_kPa\n", r"'n' and 'cycles' both"),
     ],
 )
 def test_bad_csvs_are_refused_with_what_is_missing(tmp_path, text, message):
     with pytest.raises(ValueError, match=message):
         load_triaxial_csv(_write(tmp_path, text, "bad.csv"))
+
+
+def test_implausible_fits_are_refused_at_the_fit():
+    """Strains that fall with N (b < 0) and a coefficient beyond 100 % are refused by the fit
+    with the reason (issue 30: they were refused only when applied)."""
+    cycles, strain, ratio = _synthetic(1.2, 0.18, 2.4, 0.0, 0)
+    with pytest.raises(ValueError, match=r"b = -0\.16, outside the plausible range \(0, 1\)"):
+        fit_strain_law(cycles, strain * cycles**-0.34, ratio)
+    with pytest.raises(ValueError, match=r"a = 1\.3e\+03, outside .*\(0, 100\]"):
+        fit_strain_law(cycles, strain * 1.3e3 / 1.2, ratio)
 
 
 def test_fit_refuses_unidentifiable_data():

@@ -3,34 +3,36 @@
 import pytest
 
 from model.longterm.cycles import range_weighted_cycles
-from model.params import LongTerm
+from model.params import LongTerm, Site
 from model.pipeline import run
 
 # Six points at two stress levels whose strains fall slightly with N: the least-squares fit
-# gives b < 0, outside LongTerm.b's bounds (0, 1).
+# gives b < 0, outside Layer.b's bounds (0, 1).
 FALLING_STRAINS_CSV = (
-    "N,strain,q_d,sigma_s\n"
+    "n_cycles,strain_percent,deviator_kPa,strength_kPa\n"
     "10,1.0,20,100\n100,0.9,20,100\n1000,0.8,20,100\n"
     "10,2.0,40,100\n100,1.9,40,100\n1000,1.8,40,100\n"
 )
 
 
 def test_a_fit_outside_the_bounds_is_refused_whole_and_said_on_screen():
-    """Applying a fit with b < 0 must neither raise from the button nor half-apply.
+    """A fit with b < 0 must neither raise from the button nor half-apply.
 
-    Before the fix, ``param.update`` set law, soil class 'user' and a, then refused b: the
-    callback raised and the long-term stage ran with the fitted a and the default b, m.
+    Before the first fix, ``param.update`` set law, soil class 'user' and a, then refused b:
+    the callback raised and the long-term stage ran with the fitted a and the default b, m.
+    Since issue 30 the fit itself refuses it, with the reason, so there is nothing to apply.
     """
     from dashboard.longterm_view import CalibrationPanel
 
-    longterm = LongTerm()
-    before = {name: getattr(longterm, name) for name in ("law", "soil_class", "a", "b", "m")}
-    panel = CalibrationPanel(longterm=longterm)
+    site, longterm = Site(), LongTerm()
+    layer = site.layers[0]
+    before = {name: getattr(layer, name) for name in ("soil_class", "a", "b", "m")}
+    panel = CalibrationPanel(site=site, longterm=longterm)
     panel.load_text(FALLING_STRAINS_CSV, "falling.csv")
-    assert panel.fit is not None and panel.fit["b"] < 0.0
+    assert panel.fit is None and panel.apply_button.disabled
     panel.apply()
-    assert {name: getattr(longterm, name) for name in before} == before
-    assert "Not applied" in panel.message.object and "LongTerm.b" in panel.message.object
+    assert {name: getattr(layer, name) for name in before} == before and longterm.law == "li_selig"
+    assert "Refused" in panel.message.object and "b = -0.0" in panel.message.object
 
 
 def test_a_passage_recorded_with_the_soil_already_loaded_counts_at_least_one_cycle(
@@ -51,13 +53,15 @@ def test_a_passage_recorded_with_the_soil_already_loaded_counts_at_least_one_cyc
     assert run(scenario).stress.rainflow_cycles.min() >= 1.0
 
 
-def test_a_byte_order_mark_does_not_drop_the_first_row_of_a_headerless_triaxial_csv():
+def test_a_byte_order_mark_does_not_hide_the_header_of_a_triaxial_csv():
     """Before the fix "\\ufeff10" was not a number, so the first data row was taken for a
-    header and silently dropped (5 points read from 6)."""
+    header and silently dropped (5 points read from 6). The header is now required and read by
+    name: a byte-order mark before it must not turn "n_cycles" into an unknown column."""
     from model.longterm.calibration import parse_triaxial_csv
 
+    header = "n_cycles,strain_percent,deviator_kPa,strength_kPa\n"
     rows = "10,1.0,20,100\n100,1.2,20,100\n1000,1.4,20,100\n10,2.0,40,100\n100,2.3,40,100\n"
-    data = parse_triaxial_csv("\ufeff" + rows + "1000,2.6,40,100\n", "bom.csv")
+    data = parse_triaxial_csv("\ufeff" + header + rows + "1000,2.6,40,100\n", "bom.csv")
     assert data.n_cycles.size == 6 and data.n_cycles[0] == 10.0
 
 

@@ -133,7 +133,7 @@ def test_2_a_record_too_short_for_the_deep_response_is_refused(cheap_scenario):
     scenario.soil.shear_loss_factor = 0.0
     # a soil as dense as water has no effective stress below the water table: keep it dry so
     # that the long-term stage accepts the run (its static state is not tested here)
-    scenario.longterm.water_table_depth = 200.0
+    scenario.site.water_table_depth = 100.0  # the bottom of the default profile
     with pytest.raises(ScenarioError, match=r"numerics\.zero_pad_factor = 8 .*at least (\d+)"):
         run(scenario)
     scenario.numerics.zero_pad_factor = 32

@@ -64,7 +64,9 @@ class CountingCompute:
         ("track.fastener_damping", 5e4, "fastener damping 50 kN·s/m"),
         ("soil.poisson_ratio", 0.35, "soil Poisson's ratio 0.35"),  # "(-)": no unit
         ("irregularity.track_class", 5, "FRA track class 5"),  # acronym keeps its capitals
-        ("longterm.friction_angle", 30.0, "effective friction angle φ′ 30°"),
+        ("longterm.lining_permeability", 1e-10, "lining permeability k_l 1e-10 m/s"),
+        ("site.water_table_depth", 2.0, "water table depth 2 m"),
+        ("site.layers", [{"name": "clay"}, {"name": "sand"}], "layers clay, sand"),
         ("train.single_bogie", True, "single bogie only: yes"),
         ("numerics.n_rail_modes", None, "rail modes automatic"),
         ("tunnel.model", "2.5d", "tunnel–soil model 2.5d"),

@@ -23,8 +23,8 @@
   undrained (φ_u = 0) Mohr–Coulomb, i.e. Tresca, criterion matched in plane strain by
   Drucker–Prager with zero friction, i.e. von Mises with σ_Y = √3 c_u (OpenSees
   ``J2Plasticity``, perfectly plastic, associated), with the
-  undrained strength c_u(z) of docs/model.md §10 (``longterm.cu_ratio`` × σ′_v0, or
-  ``longterm.undrained_strength``). Why undrained and c_u: a passage lasts seconds, far too short
+  undrained strength c_u(z) of docs/model.md §10 (the host layer's ``cu_ratio`` × σ′_v0,
+  or its ``undrained_strength``). Why undrained and c_u: a passage lasts seconds, far too short
   for the soft clay to drain; the strength is the one the long-term model uses. Because the
   φ = 0 criterion ignores the mean stress, the plastic model carries the geostatic stress
   minus its in-plane mean (a statically admissible isotropic part removed, body force

@@ -146,20 +146,27 @@ class Geostatic:
         return self.k0 * self.effective_vertical(y) + self.pore_pressure(y)
 
 
+def host_layer(scenario: Scenario):
+    """The site layer that holds the tunnel axis (its K0 and c_u rule the homogeneous section)."""
+    site = scenario.site
+    return site.layers[site.layer_index(scenario.tunnel.axis_depth)]
+
+
 def geostatic(scenario: Scenario) -> Geostatic:
-    """The geostatic field of the tunnel's axis depth and the long-term ground parameters (§10)."""
-    lt = scenario.longterm
+    """The geostatic field of the tunnel's axis depth, the section's soil density, the site's
+    water table and the K0 of the layer holding the tunnel (docs/model.md §10, §14)."""
     return Geostatic(
         axis_depth=scenario.tunnel.axis_depth,
         unit_weight=scenario.soil.density * GRAVITY,
-        water_table_depth=lt.water_table_depth,
-        k0=lt.earth_pressure_coefficient,
+        water_table_depth=scenario.site.water_table_depth,
+        k0=host_layer(scenario).earth_pressure_coefficient,
     )
 
 
 def undrained_strength(scenario: Scenario, y) -> np.ndarray:
-    """c_u at height y above the axis (Pa): given, or cu_ratio · σ′_v0 (docs/model.md §10)."""
-    lt = scenario.longterm
-    if lt.undrained_strength is not None:
-        return np.full(np.shape(y), float(lt.undrained_strength))
-    return lt.cu_ratio * geostatic(scenario).effective_vertical(y)
+    """c_u at height y above the axis (Pa): the host layer's, given or cu_ratio · σ′_v0
+    (docs/model.md §10)."""
+    layer = host_layer(scenario)
+    if layer.undrained_strength is not None:
+        return np.full(np.shape(y), float(layer.undrained_strength))
+    return layer.cu_ratio * geostatic(scenario).effective_vertical(y)

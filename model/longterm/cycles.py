@@ -11,7 +11,9 @@ from __future__ import annotations
 import numpy as np
 import rainflow
 
-DAYS_PER_YEAR = 365.0
+from model.params.site import DAYS_PER_YEAR
+
+__all__ = ["DAYS_PER_YEAR", "cycles_per_train", "load_cycles", "n_bogies", "range_weighted_cycles"]
 
 
 def n_bogies(train) -> int:

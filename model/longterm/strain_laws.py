@@ -7,8 +7,6 @@ loaded (q_d > 0).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 LAW_NAMES = {
@@ -38,10 +36,11 @@ def permanent_strain_percent(
     ----------
     law : {"li_selig", "chai_miura", "monismith"}
         Strain law.
-    a : float
-        Coefficient (%), > 0.
-    b, m, n : float
-        Exponents of N, of the stress ratio and (Chai & Miura) of 1 + q_s/q_f, ≥ 0.
+    a : float or array_like
+        Coefficient (%), > 0; per depth (broadcast against the stresses) for a layered site.
+    b, m, n : float or array_like
+        Exponents of N, of the stress ratio and (Chai & Miura) of 1 + q_s/q_f, ≥ 0; per depth
+        like ``a``.
     deviator : array_like
         Dynamic deviator q_d, ≥ 0 (any stress unit, the same for all three stresses).
     strength : array_like
@@ -58,13 +57,19 @@ def permanent_strain_percent(
     """
     if law not in LAW_NAMES:
         raise ValueError(f"law = {law!r} is not one of {', '.join(LAW_NAMES)}")
-    for name, value, low in (("a", a, 0.0), ("b", b, None), ("m", m, None), ("n", n, None)):
-        if not (math.isfinite(value) and (value > low if low is not None else value >= 0.0)):
-            allowed = "(0, inf)" if low is not None else "[0, inf)"
-            raise ValueError(f"{name} = {value!r} is outside the allowed range {allowed}")
+    checks = (("a", a, True), ("b", b, False), ("m", m, False), ("n", n, False))
+    for name, value, positive in checks:
+        value = np.asarray(value, dtype=float)
+        bad = ~np.isfinite(value) | ((value <= 0.0) if positive else (value < 0.0))
+        if np.any(bad):
+            allowed = "(0, inf)" if positive else "[0, inf)"
+            raise ValueError(
+                f"{name} = {float(value[bad].flat[0])!r} is outside the allowed range {allowed}"
+            )
     q_d, q_f, q_s, cycles = np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (deviator, strength, static_deviator, n_cycles))
     )
+    a, b, m, n = (np.asarray(x, dtype=float) for x in (a, b, m, n))
     if np.any(q_f <= 0.0):
         raise ValueError(f"strength = {float(q_f[q_f <= 0.0][0])!r} must be > 0")
     if np.any(q_d < 0.0) or np.any(cycles < 0.0) or np.any(q_s < 0.0):

@@ -17,7 +17,9 @@ Modules, in the order of the chain:
 - ``track``: :class:`Track` (rail, fasteners, blocks, wheel contact), :class:`Irregularity`;
 - ``ground``: :class:`Tunnel` (the lining), :class:`Soil`;
 - ``numerics``: :class:`Numerics`, the discretisation of every stage;
-- ``longterm``: :class:`LongTerm`, traffic and strain law of the permanent settlement;
+- ``site``: :class:`Site` (the soil layers top down and the water table), :class:`Layer`;
+- ``borehole``: a borehole log as a CSV file, read into layers by its header's names and units;
+- ``longterm``: :class:`LongTerm`, traffic, laws and drainage of the long-term settlement;
 - ``scenario``: :class:`Scenario` (all sections), ``SECTIONS``, presets, JSON, dotted paths;
 - ``display``: units, labels and ranges as the interface shows them.
 
@@ -32,7 +34,7 @@ from model.params.display import (
     parameter_of,
 )
 from model.params.ground import THIN_RING_MAX_RATIO, Soil, Tunnel
-from model.params.longterm import LI_SELIG_SOIL_CLASSES, LongTerm
+from model.params.longterm import LongTerm
 from model.params.numerics import Numerics
 from model.params.quantities import (
     DATA_DIR,
@@ -44,6 +46,7 @@ from model.params.quantities import (
     ScenarioError,
 )
 from model.params.scenario import SECTIONS, Scenario
+from model.params.site import LAYER_PROPERTIES, LI_SELIG_SOIL_CLASSES, Layer, Site
 from model.params.track import FRA_ROUGHNESS_CM2_RAD_PER_M, HERTZ_FITS, Irregularity, Track
 from model.params.vehicle import Train, Vehicle
 
@@ -53,6 +56,7 @@ __all__ = [
     "FRA_ROUGHNESS_CM2_RAD_PER_M",
     "GRAVITY",
     "HERTZ_FITS",
+    "LAYER_PROPERTIES",
     "LI_SELIG_SOIL_CLASSES",
     "PRESETS_FILE",
     "SECTIONS",
@@ -60,11 +64,13 @@ __all__ = [
     "Count",
     "CountOrOff",
     "Irregularity",
+    "Layer",
     "LongTerm",
     "Numerics",
     "Quantity",
     "Scenario",
     "ScenarioError",
+    "Site",
     "Soil",
     "Track",
     "Train",

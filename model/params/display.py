@@ -6,6 +6,10 @@ import param
 
 from model.params.quantities import _format_range
 from model.params.scenario import SECTIONS, Scenario
+from model.params.site import SECONDS_PER_YEAR, Layer
+
+LAYER_PATH = "site.layers."
+"""Prefix of a layer property's path: ``"site.layers.unit_weight"`` (any layer's)."""
 
 DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "vehicle.car_body_mass": ("t", 1e-3),
@@ -23,7 +27,10 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "tunnel.youngs_modulus": ("GPa", 1e-9),
     "soil.youngs_modulus": ("MPa", 1e-6),
     "numerics.dt": ("ms", 1e3),
-    "longterm.undrained_strength": ("kPa", 1e-3),
+    "site.layers.unit_weight": ("kN/m³", 1e-3),
+    "site.layers.undrained_strength": ("kPa", 1e-3),
+    "site.layers.compressibility": ("1/MPa", 1e6),
+    "site.layers.consolidation_coefficient": ("m²/year", SECONDS_PER_YEAR),
 }
 """Unit in which a person reads and types a parameter, and the factor SI value → display value.
 
@@ -37,7 +44,10 @@ def _split_label(label: str) -> tuple[str, str]:
 
 
 def parameter_of(path: str) -> param.Parameter:
-    """The parameter declaration of a dotted path, e.g. ``"soil.youngs_modulus"``."""
+    """The parameter declaration of a dotted path, e.g. ``"soil.youngs_modulus"``, or of a
+    layer property, ``"site.layers.thickness"``."""
+    if path.startswith(LAYER_PATH) and path.removeprefix(LAYER_PATH) in Layer.param:
+        return Layer.param[path.removeprefix(LAYER_PATH)]
     section, _, name = path.partition(".")
     if section not in SECTIONS or name not in Scenario.param[section].class_.param:
         raise KeyError(f"unknown parameter {path!r}")

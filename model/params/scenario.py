@@ -13,9 +13,10 @@ from typing import Any
 import param
 
 from model.params.ground import THIN_RING_MAX_RATIO, Soil, Tunnel
-from model.params.longterm import LongTerm
+from model.params.longterm import MOVED_TO_LAYERS, LongTerm
 from model.params.numerics import Numerics
 from model.params.quantities import ScenarioError, _load_presets
+from model.params.site import Site, layers_from_records
 from model.params.track import Irregularity, Track
 from model.params.vehicle import Train, Vehicle
 
@@ -27,18 +28,23 @@ SECTIONS = (
     "tunnel",
     "soil",
     "numerics",
+    "site",
     "longterm",
 )
 
-MOVED_PARAMETERS = {"longterm.axis_depth": "tunnel.axis_depth"}
+MOVED_PARAMETERS = {
+    "longterm.axis_depth": "tunnel.axis_depth",
+    "longterm.water_table_depth": "site.water_table_depth",
+}
 """Former dotted path → current one, so that scenario files written before a parameter moved to
 another section still load (the axis depth moved to the tunnel, where later models of the ground
-need it)."""
+need it; the water table to the site profile). The strength and strain-law constants that became
+properties of each layer are in ``model.params.longterm.MOVED_TO_LAYERS``."""
 
 
 class Scenario(param.Parameterized):
     """One complete set of inputs: vehicle, train, track, irregularity, tunnel, soil, numerics,
-    long-term settlement."""
+    site profile, long-term settlement."""
 
     vehicle = param.ClassSelector(class_=Vehicle, instantiate=True)
     train = param.ClassSelector(class_=Train, instantiate=True)
@@ -47,6 +53,7 @@ class Scenario(param.Parameterized):
     tunnel = param.ClassSelector(class_=Tunnel, instantiate=True)
     soil = param.ClassSelector(class_=Soil, instantiate=True)
     numerics = param.ClassSelector(class_=Numerics, instantiate=True)
+    site = param.ClassSelector(class_=Site, instantiate=True)
     longterm = param.ClassSelector(class_=LongTerm, instantiate=True)
 
     def __init__(self, **params):
@@ -103,12 +110,15 @@ class Scenario(param.Parameterized):
 
     # ---- serialisation --------------------------------------------------------------------
     def to_dict(self) -> dict[str, dict[str, Any]]:
-        """All inputs as nested plain values, ``{section: {parameter: value}}``."""
-        return {
+        """All inputs as nested plain values, ``{section: {parameter: value}}``; the site's
+        layers are a list of ``{property: value}``, top down."""
+        data = {
             section: {name: getattr(obj, name) for name in obj.param if name != "name"}
             for section in SECTIONS
             for obj in [getattr(self, section)]
         }
+        data["site"]["layers"] = self.site.records()
+        return data
 
     def to_json(self, indent: int | None = 2) -> str:
         """JSON text of :meth:`to_dict`; floats are written exactly (shortest repr)."""
@@ -183,6 +193,9 @@ class Scenario(param.Parameterized):
         All or nothing: if any value is refused, every parameter keeps its previous value.
         """
         self._check_update(values)
+        if isinstance(values.get("site", {}).get("layers"), list):
+            values = {**values, "site": {**values["site"]}}
+            values["site"]["layers"] = layers_from_records(values["site"]["layers"])
         before = {
             section: {name: getattr(getattr(self, section), name) for name in section_values}
             for section, section_values in values.items()
@@ -326,12 +339,40 @@ class Scenario(param.Parameterized):
                 f"irregularity.profile_csv = {profile!r} is not a file"
                 + ("" if Path(profile).is_absolute() else f" (relative to {Path.cwd()})")
             )
+        problems += self._profile_problems()
         if problems:
             raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
 
+    @property
+    def deepest_depth_below_ground(self) -> float:
+        """Depth below the surface of the long-term stage's deepest depth, H_t + a + d_max (m)."""
+        return self.tunnel.axis_depth + self.tunnel.ring_radius + self.numerics.max_depth
+
+    def _profile_problems(self) -> list[str]:
+        """The site profile must reach the deepest depth and hold the water table."""
+        site, problems = self.site, []
+        total, deepest = site.bottoms[-1], self.deepest_depth_below_ground
+        last = site.layers[-1]
+        if total < deepest:
+            problems.append(
+                f"site.layers reach {total:g} m below the surface, short of the long-term "
+                f"stage's deepest depth {deepest:g} m (tunnel.axis_depth {self.tunnel.axis_depth:g}"
+                f" m + ring radius {self.tunnel.ring_radius:g} m + numerics.max_depth "
+                f"{self.numerics.max_depth:g} m): make the last layer ({last.name!r}, "
+                f"site.layers[{len(site.layers) - 1}].thickness = {last.thickness:g} m) at least "
+                f"{last.thickness + deepest - total:g} m thick"
+            )
+        if site.water_table_depth > total:
+            problems.append(
+                f"site.water_table_depth = {site.water_table_depth:g} m lies below the profile, "
+                f"whose layers reach {total:g} m; allowed range [0, {total:g}] m"
+            )
+        return problems
+
 
 def _with_moved_parameters(data):
-    """``data`` with every parameter of ``MOVED_PARAMETERS`` under its current section.
+    """``data`` with every parameter of ``MOVED_PARAMETERS`` under its current section, and the
+    long-term parameters that became layer properties (``MOVED_TO_LAYERS``) in every layer.
 
     Raises
     ------
@@ -341,6 +382,7 @@ def _with_moved_parameters(data):
     if not isinstance(data, dict):
         return data  # refused, with its message, by Scenario.update
     data = {section: dict(v) if isinstance(v, dict) else v for section, v in data.items()}
+    _move_to_layers(data)
     for old, new in MOVED_PARAMETERS.items():
         (old_section, old_name), (new_section, new_name) = old.split("."), new.split(".")
         values = data.get(old_section)
@@ -356,6 +398,37 @@ def _with_moved_parameters(data):
                 f"former path of {new}; give only {new}"
             )
     return data
+
+
+def _move_to_layers(data: dict) -> None:
+    """Give every layer the ``MOVED_TO_LAYERS`` values of a former long-term section (in place).
+
+    Raises
+    ------
+    ValueError
+        A layer sets the same property to another value.
+    """
+    longterm = data.get("longterm")
+    if not isinstance(longterm, dict):
+        return
+    moved = {name: longterm.pop(name) for name in MOVED_TO_LAYERS if name in longterm}
+    site = data.setdefault("site", {})
+    if not moved or not isinstance(site, dict):
+        return
+    records = site.get("layers", [{}])
+    if not isinstance(records, list):
+        return  # refused by Scenario.update
+    site["layers"] = [dict(r) if isinstance(r, dict) else r for r in records]
+    for index, record in enumerate(site["layers"]):
+        if not isinstance(record, dict):
+            continue
+        for name, value in moved.items():
+            if record.setdefault(name, value) != value:
+                raise ValueError(
+                    f"longterm.{name} = {value!r} and site.layers[{index}].{name} = "
+                    f"{record[name]!r} disagree: longterm.{name} is the former place of the "
+                    "layers' property; give only the layers'"
+                )
 
 
 def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
