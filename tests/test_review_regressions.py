@@ -30,7 +30,7 @@ def test_a_fit_outside_the_bounds_is_refused_whole_and_said_on_screen():
     assert panel.fit is not None and panel.fit["b"] < 0.0
     panel.apply()
     assert {name: getattr(longterm, name) for name in before} == before
-    assert "Not applied" in panel.message.object and "LongTerm.b" in panel.message.object
+    assert "Not applied" in panel.message.object and "longterm.b = " in panel.message.object
 
 
 def test_a_passage_recorded_with_the_soil_already_loaded_counts_at_least_one_cycle(

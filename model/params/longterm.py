@@ -6,7 +6,7 @@ import math
 
 import param
 
-from model.params.quantities import _q
+from model.params.quantities import Choice, _q
 
 # Li & Selig (1996) parameter sets (a in %, b, m) by soil class (docs/model.md §10).
 LI_SELIG_SOIL_CLASSES = {
@@ -25,7 +25,7 @@ class LongTerm(param.Parameterized):
     parameter is read by ``model.longterm`` (the pipeline's "longterm" stage).
     """
 
-    law = param.Selector(
+    law = Choice(
         default="li_selig",
         objects=["li_selig", "chai_miura", "monismith"],
         label="Strain law",
@@ -33,7 +33,7 @@ class LongTerm(param.Parameterized):
         "Chai & Miura (2002) ε_p = a (q_d/q_f)^m (1 + q_s/q_f)^n N^b; Monismith (1975) "
         "ε_p = A N^b; evaluated in model.longterm.",
     )
-    soil_class = param.Selector(
+    soil_class = Choice(
         default="CH",
         objects=[*LI_SELIG_SOIL_CLASSES, "user"],
         label="Soil class",
@@ -99,7 +99,7 @@ class LongTerm(param.Parameterized):
         "design lives are 100 yr.",
         (False, True),
     )
-    cycles_per_train = param.Selector(
+    cycles_per_train = Choice(
         default="bogies",
         objects=["bogies", "rainflow"],
         label="Cycles per train",

@@ -346,28 +346,23 @@ def _with_moved_parameters(data):
 
 
 def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
-    """Convert command-line text to the type of ``parameter``; refuse with a clear message."""
-    if text.strip().lower() == "none" and parameter.allow_None:
+    """Convert command-line text to the type of ``parameter``; refuse it in the project's voice
+    (:func:`model.params.quantities.refusal`), showing the text as typed."""
+    stripped = text.strip()
+    if stripped.lower() == "none" and parameter.allow_None:
         return None
-    try:
-        if isinstance(parameter, param.Boolean):
-            lowered = text.strip().lower()
-            if lowered not in {"true", "false", "1", "0", "yes", "no"}:
-                raise ValueError
+    if isinstance(parameter, param.Boolean):
+        lowered = stripped.lower()
+        if lowered in {"true", "false", "1", "0", "yes", "no"}:
             return lowered in {"true", "1", "yes"}
-        if isinstance(parameter, param.Number) and "_" in text:
+        raise ValueError(parameter.refusal_text(text, f"is not {parameter.allowed_text()}"))
+    if not isinstance(parameter, param.Number):
+        return text  # options and texts: the parameter itself refuses what it does not hold
+    kind = "a whole number" if isinstance(parameter, param.Integer) else "a number"
+    try:
+        if "_" in stripped:
             raise ValueError  # int() and float() read "1_0" as 10
-        if isinstance(parameter, param.Integer):
-            return int(text)
-        if isinstance(parameter, param.Number):
-            return float(text)
+        return int(stripped) if isinstance(parameter, param.Integer) else float(stripped)
     except ValueError:
-        kind = (
-            "true/false"
-            if isinstance(parameter, param.Boolean)
-            else "whole number"
-            if isinstance(parameter, param.Integer)
-            else "number"
-        )
-        raise ValueError(f"{path} = {text!r} is not a {kind} ({parameter.label})") from None
-    return text
+        problem = f"is not {kind}; the allowed range is {parameter.allowed_text()}"
+        raise ValueError(parameter.refusal_text(text, problem)) from None
