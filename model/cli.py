@@ -6,19 +6,24 @@ Examples::
     python -m model study --preset paper --vary train.speed_kmh=40:80:5 --seeds 20 --out study
     python -m model fe --preset paper --law mohr_coulomb --passages 3 --out fe
 
-The first word picks a subcommand (``study``: parameter sweeps and Monte-Carlo bands on Dask,
-``fe``: the OpenSeesPy section check); without one, a single run is made.
+The first word picks a subcommand of :data:`MODEL_SUBCOMMANDS` (``study``: parameter sweeps and
+Monte-Carlo bands on Dask, ``fe``: the OpenSeesPy section check, ``band``: the Monte-Carlo band
+of the long-term settlement); without one, a single run is made. The ``tunnelsettle`` console
+script (``dashboard.console``) offers the same subcommands, the run as ``run``, and the
+dashboard's.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import json
 import sys
 import tempfile
 import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +31,7 @@ import numpy as np
 from model.params import Scenario
 from model.pipeline import STAGES, Results, SimulationError, run
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
+from model.scenarios import SAMPLE, SAMPLE_SCENARIO_FILE, named_file
 from model.soil.response import COMPARISON_DEPTH_M
 
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
@@ -40,7 +46,12 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         choices=Scenario.preset_names(),
         help="named scenario from model/data/presets.json (default: paper)",
     )
-    source.add_argument("--scenario", type=Path, help="scenario JSON file written by a run")
+    source.add_argument(
+        "--scenario",
+        type=Path,
+        help=f"scenario JSON file written by a run or the dashboard, or '{SAMPLE}' for the "
+        "shipped sample (the single bogie on a measured rail profile)",
+    )
     parser.add_argument(
         "--set",
         dest="overrides",
@@ -51,11 +62,66 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Argument parser of ``python -m model``."""
+@dataclass(frozen=True)
+class Subcommand:
+    """A subcommand of the command line: the module whose ``main(argv, prog)`` handles it (and
+    returns the exit code), the name of that function, and one line for the help."""
+
+    module: str
+    summary: str
+    entry: str = "main"
+
+    @property
+    def available(self) -> bool:
+        """Whether its module is installed (a subcommand may be registered before it exists)."""
+        return importlib.util.find_spec(self.module) is not None
+
+    def run(self, argv: list[str], prog: str) -> int:
+        """Hand ``argv`` to the subcommand; exit 2, saying so, where it is not available."""
+        if not self.available:
+            sys.stderr.write(
+                f"{prog}: error: not available in this version yet: {self.summary} "
+                f"(its module {self.module} is still to come)\n"
+            )
+            return 2
+        return getattr(importlib.import_module(self.module), self.entry)(argv, prog=prog)
+
+
+MODEL_SUBCOMMANDS = {
+    "study": Subcommand("model.study.cli", "parameter sweeps and Monte-Carlo bands on Dask"),
+    "fe": Subcommand("model.fe.cli", "the elastic–plastic FE check of the section (OpenSeesPy)"),
+    "band": Subcommand(
+        "model.study.band", "Monte-Carlo band of the long-term settlement (p05, p50, p95)"
+    ),
+}
+"""Subcommands of ``python -m model`` (and of ``tunnelsettle``). ``band`` is registered for
+the settlement-band module to come (``model.study.band``, with ``main(argv, prog)``): until it
+exists, the help marks it and calling it says it is not available."""
+
+
+def subcommand_help(subcommands: dict[str, Subcommand], program: str) -> str:
+    """The help's list of subcommands, one line each; those not installed are marked."""
+    width = max(len(name) for name in subcommands)
+    lines = [
+        f"  {name:<{width}}  {command.summary}"
+        + ("" if command.available else " [not available in this version]")
+        for name, command in subcommands.items()
+    ]
+    return f"subcommands ({program} SUBCOMMAND --help for the options of each):\n" + "\n".join(
+        lines
+    )
+
+
+def build_parser(prog: str = "python -m model") -> argparse.ArgumentParser:
+    """Argument parser of a single run (``python -m model``, ``tunnelsettle run``)."""
+    bare = prog == "python -m model"
     parser = argparse.ArgumentParser(
-        prog="python -m model",
-        description="Run the vehicle–track–tunnel–soil model and write its results.",
+        prog=prog,
+        description="Run the vehicle–track–tunnel–soil model on one scenario and write its "
+        "results (CSV and JSON)."
+        + (" Without a subcommand, the options below make this single run." if bare else ""),
+        epilog=subcommand_help(MODEL_SUBCOMMANDS, prog) if bare else None,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_scenario_arguments(parser)
     parser.add_argument(
@@ -70,7 +136,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def load_scenario(args: argparse.Namespace) -> Scenario:
     """Scenario from the preset or file, with the ``--set`` overrides applied."""
-    scenario = Scenario.from_file(args.scenario) if args.scenario else Scenario.preset(args.preset)
+    if args.scenario:
+        scenario = Scenario.from_file(named_file(args.scenario, SAMPLE_SCENARIO_FILE))
+    else:
+        scenario = Scenario.preset(args.preset)
     for item in args.overrides:
         path, sep, value = item.partition("=")
         if not sep:
@@ -190,17 +259,17 @@ def write_results(results: Results, out: Path) -> list[Path]:
     return [*written, scenario_path, summary_path]
 
 
-SUBCOMMANDS = {"study": "model.study.cli", "fe": "model.fe.cli"}
-"""Subcommand → module whose ``main(argv)`` handles it."""
-
-
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the process exit code (2 for bad input)."""
+    """``python -m model``: a subcommand, or a single run; returns the exit code."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv and argv[0] in SUBCOMMANDS:
-        module = importlib.import_module(SUBCOMMANDS[argv[0]])
-        return module.main(argv[1:])
-    parser = build_parser()
+    if argv and argv[0] in MODEL_SUBCOMMANDS:
+        return MODEL_SUBCOMMANDS[argv[0]].run(argv[1:], prog=f"python -m model {argv[0]}")
+    return run_main(argv)
+
+
+def run_main(argv: list[str] | None = None, prog: str = "python -m model") -> int:
+    """A single run from the command line; returns the exit code (2 for bad input)."""
+    parser = build_parser(prog)
     args = parser.parse_args(argv)
     try:
         scenario = load_scenario(args)

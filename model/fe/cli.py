@@ -40,12 +40,12 @@ def _element_size(text: str) -> float:
         ) from None
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(prog: str = "python -m model fe") -> argparse.ArgumentParser:
     """Argument parser of ``python -m model fe``."""
     from model.cli import add_scenario_arguments
 
     parser = argparse.ArgumentParser(
-        prog="python -m model fe",
+        prog=prog,
         description="Run the OpenSeesPy plane-strain section (docs/model.md §12) and store its "
         "depth profile of peak and permanent displacement.",
     )
@@ -97,12 +97,12 @@ def write_fe_outputs(result: FEResult, out: Path) -> list[Path]:
     return [stored, profile, summary]
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = "python -m model fe") -> int:
     """``python -m model fe``: returns the exit code (2 for bad input or an unavailable FE)."""
     from model.cli import TerminalProgress, load_scenario
     from model.pipeline import SimulationError
 
-    parser = build_parser()
+    parser = build_parser(prog)
     args = parser.parse_args(argv)
     try:
         scenario = load_scenario(args)
