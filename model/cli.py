@@ -112,15 +112,17 @@ def subcommand_help(subcommands: dict[str, Subcommand], program: str) -> str:
     )
 
 
-def build_parser(prog: str = "python -m model") -> argparse.ArgumentParser:
-    """Argument parser of a single run (``python -m model``, ``tunnelsettle run``)."""
-    bare = prog == "python -m model"
+def build_parser(
+    prog: str = "python -m model", with_subcommands: bool = False
+) -> argparse.ArgumentParser:
+    """Argument parser of a single run (``tunnelsettle run``; with the list of subcommands in
+    its help for ``python -m model``, whose first word may be one)."""
     parser = argparse.ArgumentParser(
         prog=prog,
         description="Run the vehicle–track–tunnel–soil model on one scenario and write its "
         "results (CSV and JSON)."
-        + (" Without a subcommand, the options below make this single run." if bare else ""),
-        epilog=subcommand_help(MODEL_SUBCOMMANDS, prog) if bare else None,
+        + (" Without a subcommand, the options below make this single run." * with_subcommands),
+        epilog=subcommand_help(MODEL_SUBCOMMANDS, prog) if with_subcommands else None,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_scenario_arguments(parser)
@@ -264,12 +266,14 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv and argv[0] in MODEL_SUBCOMMANDS:
         return MODEL_SUBCOMMANDS[argv[0]].run(argv[1:], prog=f"python -m model {argv[0]}")
-    return run_main(argv)
+    return run_main(argv, with_subcommands=True)
 
 
-def run_main(argv: list[str] | None = None, prog: str = "python -m model") -> int:
+def run_main(
+    argv: list[str] | None = None, prog: str = "python -m model", with_subcommands: bool = False
+) -> int:
     """A single run from the command line; returns the exit code (2 for bad input)."""
-    parser = build_parser(prog)
+    parser = build_parser(prog, with_subcommands)
     args = parser.parse_args(argv)
     try:
         scenario = load_scenario(args)

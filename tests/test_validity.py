@@ -174,7 +174,8 @@ def test_2_results_breaking_the_elastic_invariants_are_flagged(peaks, flagged):
 )
 def test_3_booleans_are_refused_where_numbers_are_expected(values):
     section, (name, value) = next(iter(values.items()))[0], next(iter(values.values())).popitem()
-    with pytest.raises(ValueError, match=rf"\.{name} = {value} is a boolean, not a number"):
+    expected = rf"^{section}\.{name} = {value} is a boolean, not a (whole )?number"
+    with pytest.raises(ValueError, match=expected):
         Scenario.from_json(json.dumps({section: {name: value}}))
 
 
