@@ -1,9 +1,10 @@
 """The ``tunnelsettle`` console script: every command line of the project under one name.
 
 ``tunnelsettle SUBCOMMAND ...``: ``run`` (one scenario, :mod:`model.cli`), the model's
-subcommands (``study``, ``fe``, ``band``: :data:`model.cli.MODEL_SUBCOMMANDS`), ``export`` (HTML
-reports, :mod:`dashboard.export`) and ``serve`` (the dashboard, :mod:`dashboard.serve`). Each
-module is imported only when its subcommand runs, so ``tunnelsettle run`` loads no GUI package.
+subcommands (``study``, ``fe``, ``band``: :data:`model.commands.MODEL_SUBCOMMANDS`), ``export``
+(HTML reports, :mod:`dashboard.export`) and ``serve`` (the dashboard, :mod:`dashboard.serve`). Each
+module is imported only when its subcommand runs, so ``tunnelsettle --help`` loads nothing but
+the standard library and ``tunnelsettle run`` no GUI package.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 import sys
 from importlib.metadata import PackageNotFoundError, version
 
-from model.cli import MODEL_SUBCOMMANDS, Subcommand, subcommand_help
+from model.commands import MODEL_SUBCOMMANDS, Subcommand, subcommand_help
 
 PROGRAM = "tunnelsettle"
 

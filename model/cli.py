@@ -6,28 +6,26 @@ Examples::
     python -m model study --preset paper --vary train.speed_kmh=40:80:5 --seeds 20 --out study
     python -m model fe --preset paper --law mohr_coulomb --passages 3 --out fe
 
-The first word picks a subcommand of :data:`MODEL_SUBCOMMANDS` (``study``: parameter sweeps and
-Monte-Carlo bands on Dask, ``fe``: the OpenSeesPy section check, ``band``: the Monte-Carlo band
-of the long-term settlement); without one, a single run is made. The ``tunnelsettle`` console
-script (``dashboard.console``) offers the same subcommands, the run as ``run``, and the
-dashboard's.
+The first word picks a subcommand of :data:`model.commands.MODEL_SUBCOMMANDS` (``study``:
+parameter sweeps and Monte-Carlo bands on Dask, ``fe``: the OpenSeesPy section check, ``band``:
+the Monte-Carlo band of the long-term settlement); without one, a single run is made. The
+``tunnelsettle`` console script (``dashboard.console``) offers the same subcommands, the run as
+``run``, and the dashboard's.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
-import importlib.util
 import json
 import sys
 import tempfile
 import time
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from model.commands import MODEL_SUBCOMMANDS, subcommand_help
 from model.params import Scenario
 from model.pipeline import STAGES, Results, SimulationError, run
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
@@ -59,56 +57,6 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         default=[],
         metavar="SECTION.PARAM=VALUE",
         help="override one parameter, e.g. train.speed_kmh=60 (repeatable)",
-    )
-
-
-@dataclass(frozen=True)
-class Subcommand:
-    """A subcommand of the command line: the module whose ``main(argv, prog)`` handles it (and
-    returns the exit code), the name of that function, and one line for the help."""
-
-    module: str
-    summary: str
-    entry: str = "main"
-
-    @property
-    def available(self) -> bool:
-        """Whether its module is installed (a subcommand may be registered before it exists)."""
-        return importlib.util.find_spec(self.module) is not None
-
-    def run(self, argv: list[str], prog: str) -> int:
-        """Hand ``argv`` to the subcommand; exit 2, saying so, where it is not available."""
-        if not self.available:
-            sys.stderr.write(
-                f"{prog}: error: not available in this version yet: {self.summary} "
-                f"(its module {self.module} is still to come)\n"
-            )
-            return 2
-        return getattr(importlib.import_module(self.module), self.entry)(argv, prog=prog)
-
-
-MODEL_SUBCOMMANDS = {
-    "study": Subcommand("model.study.cli", "parameter sweeps and Monte-Carlo bands on Dask"),
-    "fe": Subcommand("model.fe.cli", "the elastic–plastic FE check of the section (OpenSeesPy)"),
-    "band": Subcommand(
-        "model.study.band", "Monte-Carlo band of the long-term settlement (p05, p50, p95)"
-    ),
-}
-"""Subcommands of ``python -m model`` (and of ``tunnelsettle``). ``band`` is registered for
-the settlement-band module to come (``model.study.band``, with ``main(argv, prog)``): until it
-exists, the help marks it and calling it says it is not available."""
-
-
-def subcommand_help(subcommands: dict[str, Subcommand], program: str) -> str:
-    """The help's list of subcommands, one line each; those not installed are marked."""
-    width = max(len(name) for name in subcommands)
-    lines = [
-        f"  {name:<{width}}  {command.summary}"
-        + ("" if command.available else " [not available in this version]")
-        for name, command in subcommands.items()
-    ]
-    return f"subcommands ({program} SUBCOMMAND --help for the options of each):\n" + "\n".join(
-        lines
     )
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from dashboard import console, serve
-from model import cli
+from model import commands
 from model.params import Scenario
 from model.scenarios import SAMPLE_SCENARIO_FILE, named_file
 
@@ -35,6 +35,18 @@ def test_the_installed_script_runs(tmp_path):
         [str(script), "--help"], cwd=tmp_path, capture_output=True, text=True, check=True
     )
     assert all(f"\n  {name} " in done.stdout for name in ALL_SUBCOMMANDS)
+
+
+def test_help_answers_without_loading_the_numerical_stack():
+    """``tunnelsettle --help`` imports the standard library only, not NumPy, Numba or Panel."""
+    probe = (
+        "import sys; from dashboard import console; console.help_text(); "
+        "print(sorted({'numpy', 'numba', 'scipy', 'panel'} & set(sys.modules)))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True
+    )
+    assert done.stdout.strip() == "[]"
 
 
 def test_python_m_model_help_lists_its_subcommands():
@@ -69,7 +81,7 @@ def test_no_or_an_unknown_subcommand_is_refused_with_the_list(capsys):
 
 def test_band_is_registered_and_says_it_is_not_available_until_its_module_exists(capsys):
     """The settlement band (issue 25) plugs in as model.study.band with main(argv, prog)."""
-    band = cli.MODEL_SUBCOMMANDS["band"]
+    band = commands.MODEL_SUBCOMMANDS["band"]
     assert console.SUBCOMMANDS["band"] is band and band.module == "model.study.band"
     if band.available:
         pytest.skip("model.study.band exists: its own tests cover it")
@@ -87,7 +99,7 @@ def test_a_registered_module_gets_the_arguments_and_the_program_name(monkeypatch
     fake.main = lambda argv, prog: seen.append((argv, prog)) or 0
     monkeypatch.setitem(sys.modules, "fake_band", fake)
     monkeypatch.setattr(importlib.util, "find_spec", lambda name: name == "fake_band" or None)
-    monkeypatch.setitem(console.SUBCOMMANDS, "band", cli.Subcommand("fake_band", "band"))
+    monkeypatch.setitem(console.SUBCOMMANDS, "band", commands.Subcommand("fake_band", "band"))
     assert console.main(["band", "--seeds", "20"]) == 0
     assert seen == [(["--seeds", "20"], "tunnelsettle band")]
 
