@@ -63,8 +63,10 @@ def main(argv: list[str] | None = None, prog: str = "tunnelsettle serve") -> int
     args, extra = build_parser(prog).parse_known_args(argv)
     command = serve_command(args, extra)
     print(
-        f"dashboard at http://{args.address or 'localhost'}:{args.port}/app (the first start "
-        "compiles the kernels, about a minute; Ctrl-C stops the server)",
+        f"dashboard at http://{args.address or 'localhost'}:{args.port}/app: open it once the "
+        "server's log says 'Bokeh app running at' (loading the packages takes up to a minute "
+        "before that on a busy machine; the first start then compiles the kernels while the "
+        "page says so; Ctrl-C stops the server)",
         flush=True,
     )
     os.execv(command[0], command)
