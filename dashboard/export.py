@@ -78,7 +78,13 @@ def _session_main(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error("--session cannot be combined with --scenario or --set")
     try:
         session = named_file(args.session, SAMPLE_SESSION_FILE)
-        write_session_report(session.read_text(encoding="utf-8"), args.out)
+        try:
+            text = session.read_text(encoding="utf-8")
+        except OSError as error:
+            raise ValueError(
+                f"--session {session}: cannot read the session file ({error.strerror})"
+            ) from None
+        write_session_report(text, args.out)
     except (ValueError, OSError, SimulationError) as error:
         parser.exit(2, f"error: {error}\n")
     print(f"session report written to {args.out}")

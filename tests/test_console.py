@@ -152,3 +152,27 @@ def test_fe_refuses_an_impossible_mesh_setting_before_running_saying_why(argumen
     err = capsys.readouterr().err.splitlines()[-1]
     assert err.startswith(f"tunnelsettle fe: error: argument {argument}: '{value}'")
     assert "a length > 0 m" in err and "needs elements" not in err
+
+
+def test_a_missing_session_file_is_refused_naming_it(tmp_path, capsys):
+    """``export --session`` of a file that is not there: the option and the file, no errno text."""
+    missing = tmp_path / "nosuch.json"
+    with pytest.raises(SystemExit) as exit_info:
+        console.main(["export", "--session", str(missing), "--out", str(tmp_path / "r.html")])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert f"--session {missing}: cannot read the session file (No such file" in err
+    assert "Errno" not in err
+
+
+def test_an_unknown_parameter_path_is_named_in_one_voice():
+    """--set, the study's --vary and the URL name an unknown path the same way."""
+    scenario = Scenario.paper()
+    for path, expected in (
+        ("train.speed", "unknown parameter 'train.speed'; train has: n_cars, speed_kmh"),
+        ("trian.speed_kmh", "unknown parameter 'trian.speed_kmh': a parameter is section."),
+        ("speed_kmh", "unknown parameter 'speed_kmh': a parameter is section.parameter"),
+    ):
+        with pytest.raises(KeyError) as error:
+            scenario.set_value(path, "60")
+        assert error.value.args[0].startswith(expected)

@@ -195,7 +195,7 @@ def test_dotted_set_parses_and_refuses():
         s.set_value("train.speed_kmh", "-5")
     with pytest.raises(KeyError, match="section.parameter"):
         s.set_value("speed", "5")
-    with pytest.raises(KeyError, match="unknown parameter 'speed'"):
+    with pytest.raises(KeyError, match="unknown parameter 'train.speed'"):
         s.set_value("train.speed", "5")
 
 

@@ -215,17 +215,8 @@ class Scenario(param.Parameterized):
         A string value is converted to the parameter's type ("none" gives None for optional
         parameters).
         """
-        section, _, name = path.partition(".")
-        if section not in SECTIONS or not name:
-            raise KeyError(
-                f"{path!r} is not of the form section.parameter with section in {SECTIONS}"
-            )
+        section, name = parameter_path(path)
         obj = getattr(self, section)
-        if name not in obj.param or name == "name":
-            raise KeyError(
-                f"unknown parameter {name!r} in section {section!r}; available: "
-                f"{', '.join(n for n in obj.param if n != 'name')}"
-            )
         if isinstance(value, str):
             value = _parse_value(obj.param[name], path, value)
         setattr(obj, name, value)
@@ -315,6 +306,26 @@ class Scenario(param.Parameterized):
             )
         if problems:
             raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
+
+
+def parameter_path(path: str) -> tuple[str, str]:
+    """Section and name of the dotted parameter path ``path`` (e.g. ``"train.speed_kmh"``).
+
+    Raises
+    ------
+    KeyError
+        If no parameter has that path; the message names it and lists what exists.
+    """
+    section, _, name = path.partition(".")
+    if section not in SECTIONS or not name:
+        raise KeyError(
+            f"unknown parameter {path!r}: a parameter is section.parameter, with section one of "
+            f"{', '.join(SECTIONS)}"
+        )
+    names = [n for n in Scenario.param[section].class_.param if n != "name"]
+    if name not in names:
+        raise KeyError(f"unknown parameter {path!r}; {section} has: {', '.join(names)}")
+    return section, name
 
 
 def _with_moved_parameters(data):
