@@ -4,6 +4,7 @@ or a study, written as one self-contained file that opens offline::
     python -m dashboard.export --preset paper --out report.html
     python -m dashboard.export --scenario scenario.json --set train.speed_kmh=60 --out report.html
     python -m dashboard.export --session whatif_session.json --out report.html
+    python -m dashboard.export --session sample --out report.html   # the shipped sample
     python -m dashboard.export --study study/ --out report.html
 """
 
@@ -15,26 +16,27 @@ from pathlib import Path
 
 from dashboard.report import write_report
 from dashboard.study_report import study_report_html
+from dashboard.whatif import SAMPLE_SESSION_FILE
 from dashboard.whatif_report import write_session_report
 from model.cli import add_scenario_arguments, load_scenario
 from model.pipeline import SimulationError, run
-from model.scenarios import CUSTOM, matching_preset
+from model.scenarios import CUSTOM, matching_preset, named_file
 from model.study.definition import Study
 from model.study.tables import read_study
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(prog: str = "python -m dashboard.export") -> argparse.ArgumentParser:
     """Argument parser of ``python -m dashboard.export``."""
     parser = argparse.ArgumentParser(
-        prog="python -m dashboard.export",
+        prog=prog,
         description="Write a self-contained HTML report of a run, a what-if session or a study.",
     )
     add_scenario_arguments(parser)
     parser.add_argument(
         "--session",
         type=Path,
-        help="what-if session file saved by the dashboard: report its runs side by side "
-        "(instead of --scenario and --set)",
+        help="what-if session file saved by the dashboard, or 'sample' for the shipped sample: "
+        "report its runs side by side (instead of --scenario and --set)",
     )
     parser.add_argument(
         "--study",
@@ -46,9 +48,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = "python -m dashboard.export") -> int:
     """Entry point; returns the process exit code (2 for bad input)."""
-    parser = build_parser()
+    parser = build_parser(prog)
     args = parser.parse_args(argv)
     if args.study is not None:
         return _study_main(parser, args)
@@ -75,7 +77,14 @@ def _session_main(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
     if args.scenario is not None or args.overrides:
         parser.error("--session cannot be combined with --scenario or --set")
     try:
-        write_session_report(args.session.read_text(encoding="utf-8"), args.out)
+        session = named_file(args.session, SAMPLE_SESSION_FILE)
+        try:
+            text = session.read_text(encoding="utf-8")
+        except OSError as error:
+            raise ValueError(
+                f"--session {session}: cannot read the session file ({error.strerror})"
+            ) from None
+        write_session_report(text, args.out)
     except (ValueError, OSError, SimulationError) as error:
         parser.exit(2, f"error: {error}\n")
     print(f"session report written to {args.out}")

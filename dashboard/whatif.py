@@ -19,6 +19,8 @@ import math
 import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from importlib.resources import files
+from pathlib import Path
 from typing import Any
 
 import pandas as pd
@@ -50,6 +52,9 @@ the current run: one colour per pinned run, in pin order."""
 
 SESSION_FORMAT = "tunnelsettle-whatif-session"
 SESSION_VERSION = 1
+SAMPLE_SESSION_FILE = Path(str(files("dashboard") / "data" / "sample_session.json"))
+"""A session to start from, shipped with the package: the paper case, a stiffer soil and the
+2.5D model (``python -m dashboard.export --session sample``, or load it in the dashboard)."""
 
 MAX_NAME_CHANGES = 3  # differences listed in a default name before "+ n more"
 

@@ -11,8 +11,9 @@ The sub-packages follow the chain of the computation (docs/model.md):
 - ``study``: many runs on Dask, sweeps and Monte-Carlo bands (§11);
 - ``fe``: the OpenSeesPy finite-element check of the section (§12);
 - ``spectra`` (PSD/FFT helpers shared by the stages), ``run_cost`` (memory and time of a run,
-  estimated before it starts), ``scenarios`` (presets, train types, text overrides) and ``cli``
-  (``python -m model``).
+  estimated before it starts), ``scenarios`` (presets, train types, text overrides), ``cli``
+  (``python -m model``) and ``commands`` (its subcommand table, light enough for an instant
+  ``--help``).
 
 The public API is importable from the package itself, ``import model; model.run(...)``; each
 name is imported from its module (``PUBLIC_API``) on first use, so ``import model`` stays cheap.

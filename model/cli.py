@@ -6,14 +6,16 @@ Examples::
     python -m model study --preset paper --vary train.speed_kmh=40:80:5 --seeds 20 --out study
     python -m model fe --preset paper --law mohr_coulomb --passages 3 --out fe
 
-The first word picks a subcommand (``study``: parameter sweeps and Monte-Carlo bands on Dask,
-``fe``: the OpenSeesPy section check); without one, a single run is made.
+The first word picks a subcommand of :data:`model.commands.MODEL_SUBCOMMANDS` (``study``:
+parameter sweeps and Monte-Carlo bands on Dask, ``fe``: the OpenSeesPy section check, ``band``:
+the Monte-Carlo band of the long-term settlement); without one, a single run is made. The
+``tunnelsettle`` console script (``dashboard.console``) offers the same subcommands, the run as
+``run``, and the dashboard's.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import sys
 import tempfile
@@ -23,10 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+from model.commands import MODEL_SUBCOMMANDS, subcommand_help
 from model.params import Scenario
 from model.params.borehole import load_borehole_csv
 from model.pipeline import STAGES, Results, SimulationError, run
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
+from model.scenarios import SAMPLE, SAMPLE_SCENARIO_FILE, named_file
 from model.soil.response import COMPARISON_DEPTH_M
 
 PROGRESS_AFTER_S = 1.0  # show the bar only for runs that take longer than this
@@ -42,7 +46,12 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         choices=Scenario.preset_names(),
         help="named scenario from model/data/presets.json (default: paper)",
     )
-    source.add_argument("--scenario", type=Path, help="scenario JSON file written by a run")
+    source.add_argument(
+        "--scenario",
+        type=Path,
+        help=f"scenario JSON file written by a run or the dashboard, or '{SAMPLE}' for the "
+        "shipped sample (the single bogie on a measured rail profile)",
+    )
     parser.add_argument(
         "--set",
         dest="overrides",
@@ -59,11 +68,18 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Argument parser of ``python -m model``."""
+def build_parser(
+    prog: str = "python -m model", with_subcommands: bool = False
+) -> argparse.ArgumentParser:
+    """Argument parser of a single run (``tunnelsettle run``; with the list of subcommands in
+    its help for ``python -m model``, whose first word may be one)."""
     parser = argparse.ArgumentParser(
-        prog="python -m model",
-        description="Run the vehicle–track–tunnel–soil model and write its results.",
+        prog=prog,
+        description="Run the vehicle–track–tunnel–soil model on one scenario and write its "
+        "results (CSV and JSON)."
+        + (" Without a subcommand, the options below make this single run." * with_subcommands),
+        epilog=subcommand_help(MODEL_SUBCOMMANDS, prog) if with_subcommands else None,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_scenario_arguments(parser)
     parser.add_argument(
@@ -79,7 +95,10 @@ def build_parser() -> argparse.ArgumentParser:
 def load_scenario(args: argparse.Namespace) -> Scenario:
     """Scenario from the preset or file, with the borehole's layers and the ``--set``
     overrides applied."""
-    scenario = Scenario.from_file(args.scenario) if args.scenario else Scenario.preset(args.preset)
+    if args.scenario:
+        scenario = Scenario.from_file(named_file(args.scenario, SAMPLE_SCENARIO_FILE))
+    else:
+        scenario = Scenario.preset(args.preset)
     if args.borehole:
         scenario.site.layers = load_borehole_csv(args.borehole)
     for item in args.overrides:
@@ -245,17 +264,19 @@ def write_results(results: Results, out: Path) -> list[Path]:
     return [*written, scenario_path, summary_path]
 
 
-SUBCOMMANDS = {"study": "model.study.cli", "fe": "model.fe.cli"}
-"""Subcommand → module whose ``main(argv)`` handles it."""
-
-
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the process exit code (2 for bad input)."""
+    """``python -m model``: a subcommand, or a single run; returns the exit code."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv and argv[0] in SUBCOMMANDS:
-        module = importlib.import_module(SUBCOMMANDS[argv[0]])
-        return module.main(argv[1:])
-    parser = build_parser()
+    if argv and argv[0] in MODEL_SUBCOMMANDS:
+        return MODEL_SUBCOMMANDS[argv[0]].run(argv[1:], prog=f"python -m model {argv[0]}")
+    return run_main(argv, with_subcommands=True)
+
+
+def run_main(
+    argv: list[str] | None = None, prog: str = "python -m model", with_subcommands: bool = False
+) -> int:
+    """A single run from the command line; returns the exit code (2 for bad input)."""
+    parser = build_parser(prog, with_subcommands)
     args = parser.parse_args(argv)
     try:
         scenario = load_scenario(args)

@@ -7,14 +7,29 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
+from pathlib import Path
 
-from model.params import PRESETS_FILE, Scenario, Train
+from model.params import DATA_DIR, PRESETS_FILE, Scenario, Train
 
 DEFAULT_PRESET = "paper"
 """The paper's Nanjing case (:meth:`Scenario.paper`)."""
 
 CUSTOM = "custom"
 """Name given to inputs that match no preset or no standard train type."""
+
+SAMPLE = "sample"
+"""The word that names a shipped sample file on the command line (``--scenario sample``,
+``--session sample``), unless a file of that name exists."""
+
+SAMPLE_SCENARIO_FILE = DATA_DIR / "sample_scenario.json"
+"""A scenario file to start from: the single bogie at 60 km/h on the example measured rail
+profile, which it names by a path relative to itself (``example_profile.csv``)."""
+
+
+def named_file(path: Path, sample: Path) -> Path:
+    """``path``, or ``sample`` where ``path`` is the word :data:`SAMPLE` and no such file exists."""
+    return sample if str(path) == SAMPLE and not path.exists() else path
+
 
 TRAIN_TYPES = {"Type A": Train.type_a, "Type B": Train.type_b}
 """Standard Chinese metro cars by name; each builds a :class:`Train` of that geometry."""

@@ -1,9 +1,23 @@
-"""Shared test fixtures."""
+"""Shared test fixtures, and the report header saying which system packages are missing."""
 
 import pytest
+from system_requirements import chromium_missing, opensees_missing
 
 from model.params import Scenario
 from model.pipeline import StageCache, run
+
+
+def pytest_report_header(config):
+    """Say at the start which tests will be skipped for a missing system package, and why."""
+    missing = [
+        f"{tests} will be skipped: {reason}"
+        for tests, reason in (
+            ("browser tests", chromium_missing()),
+            ("FE tests", opensees_missing()),
+        )
+        if reason
+    ]
+    return missing or None
 
 
 def _cheap_scenario() -> Scenario:

@@ -3,7 +3,8 @@
 `panel serve dashboard/app.py` runs on a free port; every test loads the page with the cheap
 single-bogie scenario and drives it as a user would. The helpers here are also used by
 ``benchmarks/bench_dashboard.py``. Never downloads a browser: Debian's ``/usr/bin/chromium``
-is used, and the tests are skipped (with that reason) only when it is absent.
+is used, and the tests are skipped (saying how to install it) only when it is absent
+(tests/system_requirements.py).
 """
 
 from __future__ import annotations
@@ -18,12 +19,12 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from system_requirements import CHROMIUM, needs_chromium
 
 from dashboard.plot_panes import STALE_PLOT_STYLES
 from model.pipeline import STAGES
 
 ROOT = Path(__file__).resolve().parent.parent
-CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = [
     "--headless",
     "--no-sandbox",
@@ -55,9 +56,7 @@ PAINTED_JS = "() => new Promise(r => requestAnimationFrame(() => requestAnimatio
 pytestmark = [
     pytest.mark.browser,
     pytest.mark.slow,
-    pytest.mark.skipif(
-        not CHROMIUM.exists(), reason="Debian Chromium (/usr/bin/chromium) is not installed"
-    ),
+    needs_chromium,
 ]
 
 # Every Bokeh figure on the page: title, number of data points drawn and a data signature (the

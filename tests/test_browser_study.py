@@ -17,8 +17,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from system_requirements import needs_chromium
 from test_browser import (
-    CHROMIUM,
     FIGURES_JS,
     RUN_WAIT_MS,
     SERVER_START_S,
@@ -47,9 +47,7 @@ STUDY_WAIT_MS = 240_000  # LocalCluster start and kernel loading on a busy 2-cor
 pytestmark = [
     pytest.mark.browser,
     pytest.mark.slow,
-    pytest.mark.skipif(
-        not CHROMIUM.exists(), reason="Debian Chromium (/usr/bin/chromium) is not installed"
-    ),
+    needs_chromium,
 ]
 
 

@@ -12,6 +12,7 @@ import re
 import time
 
 import pytest
+from system_requirements import needs_chromium
 from test_browser import (
     CHEAP_QUERY,
     FIGURES_JS,
@@ -36,6 +37,7 @@ from model.pipeline import StageCache, run
 pytestmark = [
     pytest.mark.browser,
     pytest.mark.slow,
+    needs_chromium,
 ]
 
 PINNED = "today"

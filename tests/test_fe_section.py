@@ -9,14 +9,17 @@ whole file runs in well under a minute.
 from __future__ import annotations
 
 import math
+import re
 import sys
 
 import numpy as np
 import pytest
+from system_requirements import opensees_missing
 
-pytest.importorskip("openseespy.opensees")
+if opensees_missing():  # OpenSeesPy raises RuntimeError without BLAS/LAPACK: no importorskip
+    pytest.skip(opensees_missing(), allow_module_level=True)
 
-from model.fe.analysis import analytical_profile, gravity_state, run_fe  # noqa: E402
+from model.fe.analysis import analytical_profile, fe_time_hint, gravity_state, run_fe  # noqa: E402
 from model.fe.build import FEUnavailableError, opensees  # noqa: E402
 from model.fe.cli import main  # noqa: E402
 from model.fe.inputs import (  # noqa: E402
@@ -184,6 +187,47 @@ def test_mesh_too_coarse_for_the_band_is_refused():
     the frequency."""
     with pytest.raises(ValueError, match=r"element_size = 3 m.*8\.95 m.*4 Hz.*1\.49 m"):
         run_fe(Scenario.paper(), mesh=FEMesh(element_size=3.0), load=(hann_pulse(), DT_S))
+
+
+def test_the_run_time_is_announced_before_the_long_stages(tmp_path):
+    """run_fe tells the estimate once the mesh is known, after the load and before the gravity
+    and dynamic stages; it names the mesh size, the steps and a time."""
+    told = []
+    run_fe(
+        Scenario.paper(),
+        "elastic",
+        mesh=FEMesh(outer_radius=8.0),
+        load=(hann_pulse(), DT_S),
+        progress=lambda stage, fraction: told.append((stage, fraction)),
+        announce=lambda hint: told.append(("hint", hint)),
+    )
+    at = next(i for i, (stage, _) in enumerate(told) if stage == "hint")
+    assert told[at - 1] == ("load", 1.0) and told[at + 1] == ("gravity", 0.0)
+    assert re.fullmatch(
+        r"the FE section: \d+ elements × \d+ time steps × 1 passage with the elastic law, about "
+        r"\d+ (s|min|h) of CPU time on an idle core.*\(docs/fe_section\.md\)",
+        told[at][1],
+    )
+
+
+def test_fe_time_hint_scales_with_the_work():
+    """The documented paper case gives back its documented CPU times (docs/fe_section.md)."""
+    assert "about 94 s of CPU" in fe_time_hint(8904, 1851, 1, "elastic")
+    assert "about 6 min of CPU" in fe_time_hint(8904, 1851, 1, "mohr_coulomb")
+    assert "about 17 min of CPU" in fe_time_hint(8904, 1851, 3, "mohr_coulomb")
+
+
+@pytest.mark.parametrize(
+    ("settings", "message"),
+    [
+        ({"element_size": 0.0}, r"mesh\.element_size = 0 m must be a length > 0 m, or None"),
+        ({"outer_radius": -1.0}, r"mesh\.outer_radius = -1 m must be a length > 0 m"),
+        ({"steps_per_period": 2}, r"mesh\.steps_per_period = 2 must be a whole number ≥ 4"),
+    ],
+)
+def test_impossible_mesh_settings_are_refused_when_made(settings, message):
+    with pytest.raises(ValueError, match=message):
+        FEMesh(**settings)
 
 
 def test_bad_law_and_passages_are_refused():

@@ -21,6 +21,7 @@ from model.params import (
     Tunnel,
     Vehicle,
 )
+from model.params.quantities import number_text, split_label
 
 PARAM_CLASSES = (Vehicle, Train, Track, Irregularity, Tunnel, Soil, Numerics)
 
@@ -118,10 +119,9 @@ def test_every_bound_refuses_a_bad_value_with_a_clear_message(cls, name, p):
     with pytest.raises(ValueError) as info:
         setattr(obj, name, bad)
     message = str(info.value)
-    assert f"{cls.__name__}.{name}" in message
-    assert repr(bad) in message
+    assert message.startswith(f"{cls.__name__.lower()}.{name} = {number_text(bad)}")
     assert "allowed range" in message
-    assert p.label in message
+    assert split_label(p.label)[0] in message
 
 
 @pytest.mark.parametrize(("cls", "name", "p"), list(_bounded_parameters()))
@@ -148,7 +148,7 @@ def test_every_parameter_doc_names_where_it_is_used():
 
 
 def test_constructor_arguments_are_checked_with_the_same_message():
-    with pytest.raises(ValueError, match=r"^Soil.poisson_ratio = 0.7 is outside the allowed range"):
+    with pytest.raises(ValueError, match=r"^soil.poisson_ratio = 0.7 is outside the allowed range"):
         Soil(poisson_ratio=0.7)
 
 
@@ -157,7 +157,7 @@ def test_constructor_arguments_are_checked_with_the_same_message():
     ("cls", "name", "p"), [c for c in _bounded_parameters() if isinstance(c.values[2], Quantity)]
 )
 def test_non_finite_values_are_refused_everywhere(cls, name, p, bad):
-    with pytest.raises(ValueError, match=rf"^{cls.__name__}\.{name} = .* allowed range"):
+    with pytest.raises(ValueError, match=rf"^{cls.__name__.lower()}\.{name} = .* allowed range"):
         setattr(cls(), name, bad)
 
 
@@ -172,7 +172,7 @@ def test_kernel_sampling_takes_zero_or_at_least_six_samples_per_cycle(bad):
         assert numerics.kernel_samples_per_cycle == good
     with pytest.raises(
         ValueError,
-        match=rf"^Numerics\.kernel_samples_per_cycle = {bad} is outside the allowed range "
+        match=rf"^numerics\.kernel_samples_per_cycle = {bad} is outside the allowed range "
         r"\[6, 1024\] or 0 \(Kernel samples per cycle\)$",
     ):
         numerics.kernel_samples_per_cycle = bad
@@ -195,7 +195,7 @@ def test_dotted_set_parses_and_refuses():
         s.set_value("train.speed_kmh", "-5")
     with pytest.raises(KeyError, match="section.parameter"):
         s.set_value("speed", "5")
-    with pytest.raises(KeyError, match="unknown parameter 'speed'"):
+    with pytest.raises(KeyError, match="unknown parameter 'train.speed'"):
         s.set_value("train.speed", "5")
 
 

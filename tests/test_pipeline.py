@@ -325,9 +325,12 @@ def test_cli_writes_readable_files(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("train.speed_kmh=-5", "Train.speed_kmh = -5.0 is outside the allowed range [1, 400]"),
+        (
+            "train.speed_kmh=-5",
+            "train.speed_kmh = -5 km/h is outside the allowed range [1, 400] km/h (Speed)",
+        ),
         ("train.speed_kmh=fast", "train.speed_kmh = 'fast' is not a number"),
-        ("train.speed=5", "unknown parameter 'speed' in section 'train'"),
+        ("train.speed=5", "unknown parameter 'train.speed'; train has:"),
         ("speed_kmh", "must be of the form section.parameter=value"),
     ],
 )

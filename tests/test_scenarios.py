@@ -46,7 +46,7 @@ def test_arguments_give_preset_overrides_and_one_message_per_refusal():
     assert preset == "paper" and len(problems) == 3
     assert "unknown preset 'nope'" in problems[0]
     assert "youngs_modulus" in problems[1] and "outside the allowed range" in problems[1]
-    assert "unknown parameter 'colour'" in problems[2]
+    assert "unknown parameter 'soil.colour'" in problems[2]
     assert scenario.to_dict() == Scenario.paper().to_dict()
 
 

@@ -412,10 +412,10 @@ def test_bad_borehole_csvs_are_refused_naming_line_and_column(text, message):
 
 # ---- bad profiles -------------------------------------------------------------------------------
 def test_a_negative_thickness_is_refused_naming_the_layer():
-    with pytest.raises(ValueError, match=r"layer 'silt': Layer\.thickness = -1\.0 is outside"):
+    with pytest.raises(ValueError, match=r"layer 'silt': layer\.thickness = -1 m is outside"):
         Layer(name="silt", thickness=-1.0)
     data = {"site": {"layers": [{"name": "clay"}, {"name": "silt", "thickness": -1.0}]}}
-    with pytest.raises(ValueError, match=r"site\.layers\[1\]\.thickness = -1\.0 .*layer 'silt'"):
+    with pytest.raises(ValueError, match=r"site\.layers\[1\]\.thickness = -1 m .*layer 'silt'"):
         Scenario.from_dict(data)
     with pytest.raises(KeyError, match=r"unknown layer property.*'colour'.*site\.layers\[0\]"):
         Scenario.from_dict({"site": {"layers": [{"name": "clay", "colour": "grey"}]}})

@@ -52,7 +52,7 @@ def test_an_edit_in_display_units_reaches_the_site(table):
 @pytest.mark.parametrize(
     "column, value, message",
     [
-        ("thickness", -3.0, r"site\.layers\[0\]\.thickness = -3\.0 is outside"),
+        ("thickness", -3.0, r"site\.layers\[0\]\.thickness = -3 m is outside"),
         ("unit_weight", None, r"needs a value"),
         ("r_u_max", 1.5, r"site\.layers\[0\]\.r_u_max = 1\.5 is outside"),
         ("cu_ratio", "abc", r"'abc' is not a number"),

@@ -174,7 +174,8 @@ def test_2_results_breaking_the_elastic_invariants_are_flagged(peaks, flagged):
 )
 def test_3_booleans_are_refused_where_numbers_are_expected(values):
     section, (name, value) = next(iter(values.items()))[0], next(iter(values.values())).popitem()
-    with pytest.raises(ValueError, match=rf"\.{name} = {value} is a boolean, not a number"):
+    expected = rf"^{section}\.{name} = {value} is a boolean, not a (whole )?number"
+    with pytest.raises(ValueError, match=expected):
         Scenario.from_json(json.dumps({section: {name: value}}))
 
 
@@ -302,7 +303,7 @@ def test_7_the_estimate_counts_the_arrays_the_stages_build(cheap_scenario):
     ],
 )
 def test_8_the_smallest_float_is_refused_naming_the_parameter(path):
-    with pytest.raises(ValueError, match=rf"{path.split('.')[1]} = 5e-324 is outside"):
+    with pytest.raises(ValueError, match=rf"^{path} = 5e-324 \S+ is outside"):
         Scenario.paper().set_value(path, "5e-324")
 
 

@@ -505,6 +505,45 @@ def test_unstable_run_is_stopped_flagged_and_explained(monkeypatch):
         assert np.all(np.isfinite(array))
 
 
+def test_a_divergence_below_the_time_step_limit_blames_the_irregularity_not_the_step(tmp_path):
+    """An absurd measured profile (±1 m every 0.1 m) diverges at the first step although
+    numerics.dt = 1e-4 s is below the estimated limit: the message says the step is already
+    below it and points at the profile's amplitudes, never advises a smaller step, and reads as
+    one sentence with the pipeline's other warnings (no ".;")."""
+    from model.pipeline import SimulationError, run
+
+    x = np.arange(-160.0, 160.05, 0.1)
+    eta = np.where(np.arange(x.size) % 2 == 0, 1.0, -1.0)
+    profile = tmp_path / "absurd.csv"
+    np.savetxt(profile, np.column_stack([x, eta]), delimiter=",", header="x_m,eta_m", comments="")
+    scenario = Scenario.preset("single_bogie")
+    scenario.irregularity.profile_csv = str(profile)
+    assert scenario.numerics.dt < stable_time_step(scenario)
+    with pytest.raises(SimulationError) as info:
+        run(scenario, cache=None)
+    message = str(info.value)
+    assert "is already below the estimated stability limit" in message
+    assert f"irregularity.profile_csv = {str(profile)!r}" in message
+    assert "smaller numerics.dt" not in message and ".;" not in message
+
+
+@pytest.mark.parametrize(
+    ("enabled", "limit", "advice"),
+    [
+        (True, 1.0, "check irregularity.track_class and irregularity.wavelength_min"),
+        (False, 1.0, "on a smooth rail, forces far beyond that point to an unusual combination"),
+        (True, 1e-5, "is above the estimated stability limit 1e-05 s; use a smaller numerics.dt"),
+    ],
+)
+def test_the_divergence_advice_follows_the_cause(enabled, limit, advice):
+    """A smaller step is advised only where the step exceeds the estimated limit."""
+    scenario = smooth_single_bogie()
+    scenario.irregularity.enabled = enabled
+    message = vt._divergence_message(scenario, 0.5, limit)
+    assert message.startswith("the integration diverged at t = 0.5 s")
+    assert advice in message and not message.endswith(".")
+
+
 @pytest.mark.parametrize("per_spacing", [1.0, pytest.param(1.5, marks=pytest.mark.slow)])
 def test_stability_estimate_is_safe_but_not_wasteful(per_spacing):
     """stable_time_step against the exact stability of the linearised system (rail modes,
@@ -612,8 +651,7 @@ def test_rail_too_short_is_refused_where_it_enters():
     scenario = smooth_single_bogie()
     with pytest.raises(
         ValueError,
-        match=r"rail_end_margin = 5.0 is outside the allowed range "
-        r"\[20, 500\]",
+        match=r"^numerics\.rail_end_margin = 5 m is outside the allowed range \[20, 500\] m",
     ):
         scenario.numerics.rail_end_margin = 5.0
     span = scenario.train.axle_span + scenario.numerics.approach_distance

@@ -343,7 +343,7 @@ def _session_text(**changes):
                     }
                 ]
             ),
-            "run 'soft': Soil.youngs_modulus = -1.0 is outside the allowed range",
+            "run 'soft': soil.youngs_modulus = -1 Pa is outside the allowed range",
         ),
         (
             _session_text(runs=[{"name": "x", "colour": "red", "scenario": {}}]),
@@ -364,7 +364,10 @@ def _session_text(**changes):
             "9 runs, at most 8",
         ),
         (_session_text(reference="zz"), "reference 'zz' is not one of the runs"),
-        (_session_text(current={"train": {"speed_kmh": 0}}), "the current scenario: Train"),
+        (
+            _session_text(current={"train": {"speed_kmh": 0}}),
+            "the current scenario: train.speed_kmh = 0 km/h",
+        ),
     ],
 )
 def test_bad_or_foreign_session_files_are_refused_clearly(text, message):

@@ -11,7 +11,8 @@ with elastic or undrained Mohr–Coulomb soil, set beside the analytical profile
 - ``mesh``: :class:`FEMesh` (the user's mesh and boundary settings) and the structured
   half-annulus mesh with its consistent nodal loads;
 - ``build``: the OpenSees model: soil quads, lining beams, viscous–spring boundary, the
-  gravity stage with K0 and the analyses;
+  gravity stage with K0 and the analyses; whether OpenSeesPy can be loaded here
+  (``fe_unavailable_reason``);
 - ``analysis``: :func:`run_fe` (passages, peaks and permanent displacements),
   :func:`gravity_state`, and the analytical profile on the same load;
 - ``store``: :class:`FEResult`, stored in ``.npz`` files keyed by the scenario;

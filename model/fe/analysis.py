@@ -39,6 +39,7 @@ from model.fe.inputs import LoadBand, load_band, rayleigh_coefficients, resample
 from model.fe.mesh import ELEMENTS_PER_WAVELENGTH, FEMesh, SectionMesh, section_mesh
 from model.fe.store import FEResult
 from model.params import Scenario
+from model.run_cost import machine_load_factor
 
 TAIL_BOUNDARY_TIMES = 1.0
 """Quiet tail after each passage, in units of R/c₂ plus the boundary relaxation time."""
@@ -48,24 +49,72 @@ UNBALANCE_TOLERANCE = 1e-6
 is below this fraction of the peak invert load; one iteration then suffices where the soil
 stays elastic (changes the result by < 1e-6 of it, docs/fe_section.md)."""
 
+FE_CPU_SECONDS_PER_ELEMENT_STEP = {
+    "elastic": 94.0 / (8904 * 1851),
+    "mohr_coulomb": 347.0 / (8904 * 1851),
+}
+"""CPU time per soil element and time step (s), from docs/fe_section.md's speed table: one
+passage of the paper case on the default mesh (8904 soil elements, 1851 steps) took 94 s with
+the elastic law and 347 s with Mohr–Coulomb on the 2-core development machine. The plastic law's
+cost grows with the yielding (iterations per step), so the estimate is a guide, not a bound."""
+
 Progress = Callable[[str, float], None]
 
 
+def fe_time_hint(n_elements: int, steps_per_passage: int, passages: int, soil_law: str) -> str:
+    """One line telling how long the gravity and dynamic stages will take, before they start.
+
+    Parameters
+    ----------
+    n_elements : int
+        Soil elements of the mesh.
+    steps_per_passage : int
+        FE time steps of one passage (load record and quiet tail).
+    passages : int
+        Passages in a row.
+    soil_law : {"elastic", "mohr_coulomb"}
+
+    Returns
+    -------
+    str
+        E.g. "the FE section: 8904 elements × 1851 time steps × 1 passage, about 6 min of CPU
+        time (...)".
+    """
+    seconds = FE_CPU_SECONDS_PER_ELEMENT_STEP[soil_law] * n_elements * steps_per_passage * passages
+    load = machine_load_factor()
+    busy = f", about {_duration(load * seconds)} at this machine's load" if load > 1.05 else ""
+    plural = "s" if passages != 1 else ""
+    return (
+        f"the FE section: {n_elements} elements × {steps_per_passage} time steps × {passages} "
+        f"passage{plural} with the {soil_law} law, about {_duration(seconds)} of CPU time on an "
+        f"idle core{busy} (docs/fe_section.md)"
+    )
+
+
+def _duration(seconds: float) -> str:
+    """Rounded duration text: "40 s", "6 min", "2.5 h"."""
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
 # ---- public entry points ----------------------------------------------------------------------
-def _check_mesh(mesh: FEMesh, ring_radius: float, band: LoadBand) -> float:
-    """Largest element size to use (m); ValueError naming the numbers when too coarse."""
+def _check_boundary(mesh: FEMesh, ring_radius: float) -> None:
+    """Refuse a boundary too close to the lining, before any computation."""
     if not mesh.outer_radius > ring_radius + 1.0:
         raise ValueError(
             f"mesh.outer_radius = {mesh.outer_radius:g} m must exceed the ring radius "
             f"{ring_radius:g} m by more than 1 m"
         )
-    if mesh.steps_per_period < 4:
-        raise ValueError(f"mesh.steps_per_period = {mesh.steps_per_period} must be ≥ 4")
-    if mesh.radial_aspect < 1.0:
-        raise ValueError(f"mesh.radial_aspect = {mesh.radial_aspect:g} must be ≥ 1")
+
+
+def _check_mesh(mesh: FEMesh, band: LoadBand) -> float:
+    """Largest element size to use (m); ValueError naming the numbers when too coarse."""
     limit = band.shortest_wavelength_m / ELEMENTS_PER_WAVELENGTH
     size = limit if mesh.element_size is None else mesh.element_size
-    if not 0 < size <= limit * (1 + 1e-9):
+    if not size <= limit * (1 + 1e-9):
         raise ValueError(
             f"mesh.element_size = {size:g} m cannot resolve the shortest wavelength of the load "
             f"band: c₂/f_high = {band.shortest_wavelength_m:.3g} m at f_high = "
@@ -82,6 +131,7 @@ def run_fe(
     mesh: FEMesh | None = None,
     progress: Progress | None = None,
     load: tuple[np.ndarray, float] | None = None,
+    announce: Callable[[str], None] | None = None,
 ) -> FEResult:
     """Run the OpenSeesPy plane-strain section under the line-load history at the invert.
 
@@ -101,6 +151,9 @@ def run_fe(
     load : (ndarray, float), optional
         A line-load history (N/m) and its sampling interval (s) to use instead of the
         pipeline's.
+    announce : callable(str), optional
+        Told :func:`fe_time_hint` once the mesh and the time step are known, before the gravity
+        and dynamic stages (the long part) start.
 
     Returns
     -------
@@ -118,6 +171,7 @@ def run_fe(
     if not (isinstance(passages, int) and 1 <= passages <= 100):
         raise ValueError(f"passages = {passages!r} must be an integer in [1, 100]")
     mesh = mesh or FEMesh()
+    _check_boundary(mesh, scenario.tunnel.ring_radius)
     report = progress or (lambda stage, fraction: None)
     ops = opensees()
     timings = {}
@@ -135,14 +189,22 @@ def run_fe(
         q_raw, dt_raw = np.asarray(load[0], dtype=float), float(load[1])
     soil, tunnel = scenario.soil, scenario.tunnel
     band = load_band(q_raw, dt_raw, soil.s_wave_speed)
-    size = _check_mesh(mesh, tunnel.ring_radius, band)
+    size = _check_mesh(mesh, band)
     q, dt = resample_load(q_raw, dt_raw, 1.0 / (mesh.steps_per_period * band.f_high_hz))
+    grid = section_mesh(tunnel.ring_radius, mesh.outer_radius, size, mesh.radial_aspect)
+    # one passage = load record + quiet tail; the boundary relaxes in ~ρ c₁ R / (α_N G)
+    relax = soil.p_wave_speed * mesh.outer_radius / (SPRING_NORMAL * soil.s_wave_speed**2)
+    n_tail = max(
+        3, math.ceil(TAIL_BOUNDARY_TIMES * (mesh.outer_radius / soil.s_wave_speed + relax) / dt)
+    )
+    n_passage = q.size + n_tail
     timings["load"] = time.perf_counter() - start
     report("load", 1.0)
+    if announce is not None:
+        announce(fe_time_hint(grid.n_rings * grid.n_theta, n_passage, passages, soil_law))
 
     start = time.perf_counter()
     report("gravity", 0.0)
-    grid = section_mesh(tunnel.ring_radius, mesh.outer_radius, size, mesh.radial_aspect)
     book = build_section(ops, scenario, grid, soil_law, mesh.plastic_radius)
     anchor = apply_gravity(ops, scenario, grid, soil_law)
     ops.remove("element", anchor)
@@ -152,12 +214,6 @@ def run_fe(
     timings["gravity"] = time.perf_counter() - start
     report("gravity", 1.0)
 
-    # one passage = load record + quiet tail; the boundary relaxes in ~ρ c₁ R / (α_N G)
-    relax = soil.p_wave_speed * mesh.outer_radius / (SPRING_NORMAL * soil.s_wave_speed**2)
-    n_tail = max(
-        3, math.ceil(TAIL_BOUNDARY_TIMES * (mesh.outer_radius / soil.s_wave_speed + relax) / dt)
-    )
-    n_passage = q.size + n_tail
     history = np.concatenate([np.concatenate([q, np.zeros(n_tail)])] * passages)
     a0, a1 = rayleigh_coefficients(soil.shear_loss_factor, band.f_low_hz, band.f_high_hz)
     ops.timeSeries("Path", 3, "-dt", dt, "-values", *history.tolist(), 0.0)

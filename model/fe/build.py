@@ -70,12 +70,35 @@ class FEConvergenceError(RuntimeError):
 
 
 def opensees():
-    """The ``openseespy.opensees`` module, or FEUnavailableError with the one-line fix."""
+    """The ``openseespy.opensees`` module, or FEUnavailableError with the one-line fix.
+
+    Without its shared libraries (Debian's BLAS/LAPACK) OpenSeesPy's import raises
+    ``RuntimeError: Failed to import openseespy on Linux.``, hiding the loader's reason in the
+    exception's context: the message gives that reason (e.g. "libopenblas.so.0: cannot open
+    shared object file").
+    """
     try:
         import openseespy.opensees as ops
-    except (ImportError, OSError) as error:  # OSError/ImportError: missing BLAS/LAPACK too
-        raise FEUnavailableError(f"{FE_EXTRA_MESSAGE} ({error})") from error
+    except (ImportError, OSError, RuntimeError) as error:
+        raise FEUnavailableError(f"{FE_EXTRA_MESSAGE} ({_root_cause(error)})") from error
     return ops
+
+
+def fe_unavailable_reason() -> str | None:
+    """Why the FE section cannot run here (the message of :func:`opensees`), or None if it can."""
+    try:
+        opensees()
+    except FEUnavailableError as error:
+        return str(error)
+    return None
+
+
+def _root_cause(error: BaseException) -> str:
+    """The innermost import or loader error behind ``error`` (its message), else ``error``'s."""
+    cause = error
+    while cause.__cause__ or cause.__context__:
+        cause = cause.__cause__ or cause.__context__
+    return str(cause) if isinstance(cause, ImportError | OSError) else str(error)
 
 
 # ---- model building ---------------------------------------------------------------------------

@@ -4,25 +4,48 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from model.fe.analysis import SOIL_LAWS, run_fe
 from model.fe.build import FEConvergenceError, FEUnavailableError
-from model.fe.mesh import FEMesh
+from model.fe.mesh import ELEMENT_SIZE_ALLOWED, FEMesh
 from model.fe.store import FEResult, save_fe_result
 
 # ---- command line -----------------------------------------------------------------------------
 FE_STAGES = ("load", "gravity", "dynamic")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _positive_length(text: str) -> float:
+    """A length > 0 m from the command line; refused in argparse's "argument --x: ..." line."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a length > 0 m")
+    return value
+
+
+def _element_size(text: str) -> float:
+    """``--element-size``: a length > 0 m; omitting it takes the size from the load band."""
+    try:
+        return _positive_length(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} must be {ELEMENT_SIZE_ALLOWED.replace('or None', 'or omitted')}"
+        ) from None
+
+
+def build_parser(prog: str = "python -m model fe") -> argparse.ArgumentParser:
     """Argument parser of ``python -m model fe``."""
     from model.cli import add_scenario_arguments
 
     parser = argparse.ArgumentParser(
-        prog="python -m model fe",
+        prog=prog,
         description="Run the OpenSeesPy plane-strain section (docs/model.md §12) and store its "
         "depth profile of peak and permanent displacement.",
     )
@@ -30,12 +53,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--law", choices=SOIL_LAWS, default="mohr_coulomb", help="soil law")
     parser.add_argument("--passages", type=int, default=1, help="passages in a row (default 1)")
     parser.add_argument(
-        "--outer-radius", type=float, default=FEMesh.outer_radius, help="boundary radius R (m)"
+        "--outer-radius",
+        type=_positive_length,
+        default=FEMesh.outer_radius,
+        help="boundary radius R (m)",
     )
     parser.add_argument(
-        "--element-size", type=float, default=None, help="largest element edge (m); default "
-        "from the load band",
-    )  # fmt: skip
+        "--element-size",
+        type=_element_size,
+        default=None,
+        help="largest element edge (m); default: the size that resolves the load band",
+    )
     parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return parser
@@ -69,19 +97,28 @@ def write_fe_outputs(result: FEResult, out: Path) -> list[Path]:
     return [stored, profile, summary]
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = "python -m model fe") -> int:
     """``python -m model fe``: returns the exit code (2 for bad input or an unavailable FE)."""
     from model.cli import TerminalProgress, load_scenario
     from model.pipeline import SimulationError
 
-    parser = build_parser()
+    parser = build_parser(prog)
     args = parser.parse_args(argv)
     try:
         scenario = load_scenario(args)
         mesh = FEMesh(outer_radius=args.outer_radius, element_size=args.element_size)
         progress = None if args.quiet else TerminalProgress(stages=FE_STAGES)
+
+        def announce(hint: str) -> None:
+            if progress is not None:
+                progress.close()  # the hint on a line of its own; the bar resumes below it
+                progress.shown = False
+                print(hint, file=sys.stderr)
+
         try:
-            result = run_fe(scenario, args.law, args.passages, mesh, progress=progress)
+            result = run_fe(
+                scenario, args.law, args.passages, mesh, progress=progress, announce=announce
+            )
         finally:
             if progress is not None:
                 progress.close()

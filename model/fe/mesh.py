@@ -53,6 +53,36 @@ class FEMesh:
     plastic_radius: float = 12.0
     steps_per_period: int = STEPS_PER_PERIOD
 
+    def __post_init__(self) -> None:
+        """Refuse settings that no mesh can have, naming the setting, its value and what is
+        allowed (limits that depend on the scenario and the load band are run_fe's)."""
+        rules = (
+            ("outer_radius", " m", lambda v: v > 0, "a length > 0 m"),
+            ("radial_aspect", "", lambda v: v >= 1, "a ratio ≥ 1"),
+            ("plastic_radius", " m", lambda v: v >= 0, "a radius ≥ 0 m"),
+            ("element_size", " m", lambda v: v > 0, ELEMENT_SIZE_ALLOWED),
+            ("steps_per_period", "", lambda v: v >= 4 and v == int(v), "a whole number ≥ 4"),
+        )
+        for name, unit, holds, allowed in rules:
+            value = getattr(self, name)
+            if name == "element_size" and value is None:
+                continue
+            if not (_finite(value) and holds(value)):
+                shown = f"{value:g}{unit}" if _finite(value) else repr(value)
+                raise ValueError(f"mesh.{name} = {shown} must be {allowed}")
+
+
+ELEMENT_SIZE_ALLOWED = (
+    f"a length > 0 m, or None for the size that resolves the load band "
+    f"(λ_min/{ELEMENTS_PER_WAVELENGTH})"
+)
+"""What ``element_size`` may be, as the refusals of FEMesh and ``python -m model fe`` say it."""
+
+
+def _finite(value) -> bool:
+    """A real number, neither NaN nor infinite."""
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
 
 # ---- mesh -------------------------------------------------------------------------------------
 @dataclass(frozen=True)

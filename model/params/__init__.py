@@ -11,8 +11,9 @@ before any computation.
 
 Modules, in the order of the chain:
 
-- ``quantities``: the parameter types (:class:`Quantity`, :class:`Count`, :class:`CountOrOff`)
-  and their refusal messages, :class:`ScenarioError`, g and the package data files;
+- ``quantities``: the parameter types (:class:`Quantity`, :class:`Count`, :class:`CountOrOff`,
+  :class:`Choice`, :class:`Switch`, :class:`Text`), the one voice of their refusals
+  (:func:`refusal`), :class:`ScenarioError`, g and the package data files;
 - ``vehicle``: :class:`Vehicle` (one car's masses and suspensions), :class:`Train`;
 - ``track``: :class:`Track` (rail, fasteners, blocks, wheel contact), :class:`Irregularity`;
 - ``ground``: :class:`Tunnel` (the lining), :class:`Soil`;
@@ -40,10 +41,14 @@ from model.params.quantities import (
     DATA_DIR,
     GRAVITY,
     PRESETS_FILE,
+    Choice,
     Count,
     CountOrOff,
     Quantity,
     ScenarioError,
+    Switch,
+    Text,
+    refusal,
 )
 from model.params.scenario import SECTIONS, Scenario
 from model.params.site import LAYER_PROPERTIES, LI_SELIG_SOIL_CLASSES, Layer, Site
@@ -61,6 +66,7 @@ __all__ = [
     "PRESETS_FILE",
     "SECTIONS",
     "THIN_RING_MAX_RATIO",
+    "Choice",
     "Count",
     "CountOrOff",
     "Irregularity",
@@ -72,6 +78,8 @@ __all__ = [
     "ScenarioError",
     "Site",
     "Soil",
+    "Switch",
+    "Text",
     "Track",
     "Train",
     "Tunnel",
@@ -80,4 +88,5 @@ __all__ = [
     "display_range",
     "display_unit",
     "parameter_of",
+    "refusal",
 ]

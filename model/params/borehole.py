@@ -16,8 +16,8 @@ import csv
 import io
 from pathlib import Path
 
-from model.params.display import LAYER_PATH, _split_label, display_unit
-from model.params.quantities import _format_range
+from model.params.display import LAYER_PATH, display_unit
+from model.params.quantities import _format_range, split_label
 from model.params.site import LAYER_PROPERTIES, Layer, layers_from_records
 
 REQUIRED = ("name", "thickness", "unit_weight")
@@ -37,7 +37,7 @@ def _normal(unit: str) -> str:
 def units_of(name: str) -> dict[str, float]:
     """Units a layer property may be given in → factor that turns a value in it into SI."""
     parameter = Layer.param[name]
-    si_unit = _split_label(parameter.label or name)[1]
+    si_unit = split_label(parameter.label or name)[1]
     units = {_normal(si_unit): 1.0}
     shown, factor = display_unit(LAYER_PATH + name)
     units[_normal(shown)] = 1.0 / factor
@@ -172,7 +172,7 @@ def _check_bounds(parameter, value: float, factor: float, unit: str, where: str)
     above = high is not None and (si > high or (si == high and not high_in))
     if below or above or si != si:
         shown = tuple(None if b is None else float(f"{b / factor:.12g}") for b in (low, high))
-        bare = _split_label(parameter.label or "")[0]
+        bare = split_label(parameter.label or "")[0]
         raise ValueError(
             f"{where}: {value:g} is outside the allowed range "
             f"{_format_range(shown, parameter.inclusive_bounds)}{' ' + unit if unit else ''} "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import param
 
-from model.params.quantities import _format_range
+from model.params.quantities import _format_range, split_label
 from model.params.scenario import SECTIONS, Scenario
 from model.params.site import SECONDS_PER_YEAR, Layer
 
@@ -37,12 +37,6 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
 Parameters not listed are shown in the SI unit of their label."""
 
 
-def _split_label(label: str) -> tuple[str, str]:
-    """("Soil Young's modulus", "Pa") from "Soil Young's modulus (Pa)"; no unit gives ""."""
-    bare, sep, unit = label.rstrip().rpartition(" (")
-    return (bare, unit[:-1]) if sep and unit.endswith(")") else (label, "")
-
-
 def parameter_of(path: str) -> param.Parameter:
     """The parameter declaration of a dotted path, e.g. ``"soil.youngs_modulus"``, or of a
     layer property, ``"site.layers.thickness"``."""
@@ -58,12 +52,12 @@ def display_unit(path: str) -> tuple[str, float]:
     """(unit, factor) in which ``path`` is shown: display value = factor × SI value."""
     if path in DISPLAY_UNITS:
         return DISPLAY_UNITS[path]
-    return _split_label(parameter_of(path).label or path)[1], 1.0
+    return split_label(parameter_of(path).label or path)[1], 1.0
 
 
 def display_label(path: str) -> str:
     """The parameter's label with its display unit in place of the SI unit."""
-    bare = _split_label(parameter_of(path).label or path)[0]
+    bare = split_label(parameter_of(path).label or path)[0]
     unit, _ = display_unit(path)
     return f"{bare} ({unit})" if unit and unit != "-" else bare
 
@@ -73,5 +67,5 @@ def display_range(path: str) -> str:
     p = parameter_of(path)
     unit, factor = display_unit(path)
     bounds = tuple(None if b is None else b * factor for b in p.bounds or (None, None))
-    text = _format_range(bounds, p.inclusive_bounds)
+    text = _format_range(bounds, p.inclusive_bounds, isinstance(p, param.Integer))
     return f"{text} {unit}" if unit and unit != "-" else text

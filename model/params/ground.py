@@ -6,7 +6,7 @@ import math
 
 import param
 
-from model.params.quantities import _q
+from model.params.quantities import Choice, _q
 
 # Thin-ring limit on the lining, h/a (Scenario.validate): thin-ring theory neglects shear
 # deformation and the stress variation through the thickness, relative errors of order (h/a)²
@@ -81,7 +81,7 @@ class Tunnel(param.Parameterized):
         (False, True),
     )
 
-    model = param.Selector(
+    model = Choice(
         default="2d",
         objects=["2d", "2.5d"],
         label="Tunnel–soil model",
@@ -91,7 +91,7 @@ class Tunnel(param.Parameterized):
         "Dispatched by the soil stage of model.pipeline.run.",
     )
 
-    ground = param.Selector(
+    ground = Choice(
         default="full_space",
         objects=["full_space", "half_space"],
         label="Ground",

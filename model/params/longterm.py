@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import param
 
-from model.params.quantities import _q
+from model.params.quantities import Choice, _q
 from model.params.site import ILLUSTRATIVE
 
 # ``s.longterm`` parameters of wave 2 that are now properties of each layer (``s.site.layers``):
@@ -30,7 +30,7 @@ class LongTerm(param.Parameterized):
     pipeline's "longterm" stage).
     """
 
-    law = param.Selector(
+    law = Choice(
         default="li_selig",
         objects=["li_selig", "chai_miura", "monismith"],
         label="Strain law",
@@ -58,14 +58,14 @@ class LongTerm(param.Parameterized):
         "design lives are 100 yr.",
         (False, True),
     )
-    cycles_per_train = param.Selector(
+    cycles_per_train = Choice(
         default="bogies",
         objects=["bogies", "rainflow"],
         label="Cycles per train",
         doc="Load cycles per passage in model.longterm: one per bogie, or counted on the deviator "
         "history by rainflow (ASTM E1049), full cycles weighted by their range.",
     )
-    pore_pressure_law = param.Selector(
+    pore_pressure_law = Choice(
         default="power",
         objects=["power", "hyperbolic", "none"],
         label="Pore-pressure law",
@@ -75,7 +75,7 @@ class LongTerm(param.Parameterized):
         "consolidation settlement in model.longterm.consolidation. 'none': no pore pressure, "
         "the settlement is the plastic part alone (wave 2's model).",
     )
-    invert_drainage = param.Selector(
+    invert_drainage = Choice(
         default="sealed",
         objects=["sealed", "drained", "leaking"],
         label="Drainage at the invert",
@@ -85,7 +85,7 @@ class LongTerm(param.Parameterized):
         "(flow through the lining, k_s ∂u/∂z = (k_l/t_l) u, with longterm.lining_permeability "
         "and the lining thickness tunnel.thickness).",
     )
-    base_drainage = param.Selector(
+    base_drainage = Choice(
         default="drained",
         objects=["drained", "sealed"],
         label="Drainage at the base",

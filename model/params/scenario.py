@@ -233,17 +233,8 @@ class Scenario(param.Parameterized):
         A string value is converted to the parameter's type ("none" gives None for optional
         parameters).
         """
-        section, _, name = path.partition(".")
-        if section not in SECTIONS or not name:
-            raise KeyError(
-                f"{path!r} is not of the form section.parameter with section in {SECTIONS}"
-            )
+        section, name = parameter_path(path)
         obj = getattr(self, section)
-        if name not in obj.param or name == "name":
-            raise KeyError(
-                f"unknown parameter {name!r} in section {section!r}; available: "
-                f"{', '.join(n for n in obj.param if n != 'name')}"
-            )
         if isinstance(value, str):
             value = _parse_value(obj.param[name], path, value)
         setattr(obj, name, value)
@@ -370,6 +361,26 @@ class Scenario(param.Parameterized):
         return problems
 
 
+def parameter_path(path: str) -> tuple[str, str]:
+    """Section and name of the dotted parameter path ``path`` (e.g. ``"train.speed_kmh"``).
+
+    Raises
+    ------
+    KeyError
+        If no parameter has that path; the message names it and lists what exists.
+    """
+    section, _, name = path.partition(".")
+    if section not in SECTIONS or not name:
+        raise KeyError(
+            f"unknown parameter {path!r}: a parameter is section.parameter, with section one of "
+            f"{', '.join(SECTIONS)}"
+        )
+    names = [n for n in Scenario.param[section].class_.param if n != "name"]
+    if name not in names:
+        raise KeyError(f"unknown parameter {path!r}; {section} has: {', '.join(names)}")
+    return section, name
+
+
 def _with_moved_parameters(data):
     """``data`` with every parameter of ``MOVED_PARAMETERS`` under its current section, and the
     long-term parameters that became layer properties (``MOVED_TO_LAYERS``) in every layer.
@@ -432,28 +443,23 @@ def _move_to_layers(data: dict) -> None:
 
 
 def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
-    """Convert command-line text to the type of ``parameter``; refuse with a clear message."""
-    if text.strip().lower() == "none" and parameter.allow_None:
+    """Convert command-line text to the type of ``parameter``; refuse it in the project's voice
+    (:func:`model.params.quantities.refusal`), showing the text as typed."""
+    stripped = text.strip()
+    if stripped.lower() == "none" and parameter.allow_None:
         return None
-    try:
-        if isinstance(parameter, param.Boolean):
-            lowered = text.strip().lower()
-            if lowered not in {"true", "false", "1", "0", "yes", "no"}:
-                raise ValueError
+    if isinstance(parameter, param.Boolean):
+        lowered = stripped.lower()
+        if lowered in {"true", "false", "1", "0", "yes", "no"}:
             return lowered in {"true", "1", "yes"}
-        if isinstance(parameter, param.Number) and "_" in text:
+        raise ValueError(parameter.refusal_text(text, f"is not {parameter.allowed_text()}"))
+    if not isinstance(parameter, param.Number):
+        return text  # options and texts: the parameter itself refuses what it does not hold
+    kind = "a whole number" if isinstance(parameter, param.Integer) else "a number"
+    try:
+        if "_" in stripped:
             raise ValueError  # int() and float() read "1_0" as 10
-        if isinstance(parameter, param.Integer):
-            return int(text)
-        if isinstance(parameter, param.Number):
-            return float(text)
+        return int(stripped) if isinstance(parameter, param.Integer) else float(stripped)
     except ValueError:
-        kind = (
-            "true/false"
-            if isinstance(parameter, param.Boolean)
-            else "whole number"
-            if isinstance(parameter, param.Integer)
-            else "number"
-        )
-        raise ValueError(f"{path} = {text!r} is not a {kind} ({parameter.label})") from None
-    return text
+        problem = f"is not {kind}; the allowed range is {parameter.allowed_text()}"
+        raise ValueError(parameter.refusal_text(text, problem)) from None

@@ -18,7 +18,7 @@ import math
 
 import param
 
-from model.params.quantities import _q
+from model.params.quantities import Choice, _q
 
 # Li & Selig (1996) parameter sets (a in %, b, m) by soil class (docs/model.md §10).
 LI_SELIG_SOIL_CLASSES = {
@@ -95,7 +95,7 @@ class Layer(param.Parameterized):
         (False, True),
         allow_none=True,
     )
-    soil_class = param.Selector(
+    soil_class = Choice(
         default="CH",
         objects=[*LI_SELIG_SOIL_CLASSES, "user"],
         label="Soil class",
@@ -359,6 +359,6 @@ def layers_from_records(records) -> list[Layer]:
         try:
             layers.append(Layer(**record))
         except (ValueError, TypeError) as error:
-            text = str(error).removeprefix(f"layer {name!r}: ").replace("Layer.", f"{where}.", 1)
+            text = str(error).removeprefix(f"layer {name!r}: ").replace("layer.", f"{where}.", 1)
             raise ValueError(f"{text}, layer {name!r}") from None
     return layers

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import param
 
-from model.params.quantities import Count, _q
+from model.params.quantities import Choice, Count, Switch, Text, _q
 
 # Hertz contact constant G = a R^b × 1e-8 m/N^(2/3) (Zhai's empirical fits), by wheel tread type.
 HERTZ_FITS = {"conical": (4.57, -0.149), "worn": (3.86, -0.115)}
@@ -111,7 +111,7 @@ class Track(param.Parameterized):
         "made (wheel diameters 0.5–1.2 m).",
     )
 
-    wheel_tread = param.Selector(
+    wheel_tread = Choice(
         default="conical",
         objects=list(HERTZ_FITS),
         label="Wheel tread",
@@ -161,7 +161,7 @@ class Irregularity(param.Parameterized):
     Used by ``model.track.irregularity.profile_for`` (called from ``model.track.assembly``).
     """
 
-    enabled = param.Boolean(
+    enabled = Switch(
         True,
         label="Irregularity on",
         doc="If false, the rail is perfectly smooth (model.track.irregularity.profile_for).",
@@ -209,7 +209,7 @@ class Irregularity(param.Parameterized):
         doc="Number of cosines N_k in model.track.irregularity.synthesize_profile. Bounds 10–2e5: "
         "the cost grows as N_k × profile points (see the run-cost guard).",
     )
-    profile_csv = param.String(
+    profile_csv = Text(
         None,
         allow_None=True,
         label="Measured profile CSV",

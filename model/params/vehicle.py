@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import param
 
-from model.params.quantities import GRAVITY, Count, _load_presets, _q
+from model.params.quantities import GRAVITY, Count, Switch, _load_presets, _q
 
 
 class Vehicle(param.Parameterized):
@@ -157,7 +157,7 @@ class Train(param.Parameterized):
         "bogies have 1.6–3.5 m.",
     )
 
-    single_bogie = param.Boolean(
+    single_bogie = Switch(
         False,
         label="Single bogie only",
         doc="If true, simulate the paper's Fig. 1 model: half a car body on one bogie with two "

@@ -40,12 +40,12 @@ def parse_values(spec: str) -> list[str] | tuple[str, str] | None:
     return [f"{start + i * step:.12g}" for i in range(count)]
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(prog: str = "python -m model study") -> argparse.ArgumentParser:
     """Argument parser of ``python -m model study``."""
     from model.cli import add_scenario_arguments
 
     parser = argparse.ArgumentParser(
-        prog="python -m model study",
+        prog=prog,
         description="Parameter sweeps and Monte-Carlo bands on Dask distributed.",
     )
     add_scenario_arguments(parser)
@@ -127,7 +127,7 @@ def study_from_args(args: argparse.Namespace) -> Study:
     )
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, prog: str = "python -m model study") -> int:
     """``python -m model study``: returns the exit code (2 bad input, 130 cancelled)."""
     from model.cli import TerminalProgress
 
@@ -145,7 +145,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             self.stream.flush()
             self.shown = True
 
-    parser = build_parser()
+    parser = build_parser(prog)
     args = parser.parse_args(None if argv is None else list(argv))
     progress = None if args.quiet else StudyProgress()
     try:

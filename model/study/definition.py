@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 import param
 
-from model.params import SECTIONS, Scenario
+from model.params import Scenario
+from model.params.scenario import parameter_path
 from model.track.vehicle_track import check_inputs
 
 MAX_RUNS_UNCONFIRMED = 500
@@ -199,14 +200,11 @@ def define_study(
 
 def _parameter(path: str) -> param.Parameter:
     """The parameter at a dotted path, or a one-line error listing what exists."""
-    section, _, name = path.partition(".")
-    if section not in SECTIONS or not name:
-        raise ValueError(f"{path!r} is not of the form section.parameter, section in {SECTIONS}")
-    obj = Scenario.param[section].class_
-    if name not in obj.param or name == "name":
-        names = ", ".join(n for n in obj.param if n != "name")
-        raise ValueError(f"unknown parameter {path!r}; {section} has: {names}")
-    return obj.param[name]
+    try:
+        section, name = parameter_path(path)
+    except KeyError as error:
+        raise ValueError(error.args[0]) from None
+    return Scenario.param[section].class_.param[name]
 
 
 def _set(scenario: Scenario, path: str, value: Any) -> Any:

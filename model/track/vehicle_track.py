@@ -457,12 +457,7 @@ def simulate(
     offsets = np.asarray(scenario.train.axle_offsets, dtype=float)
     warnings = []
     if run.diverged is not None:
-        warnings.append(
-            f"the integration diverged at t = {nt * dt:.4g} s (a wheel–rail compression passed "
-            f"{DIVERGENCE_COMPRESSION * 1e3:g} mm or became non-finite) and was stopped; the "
-            f"record ends there. The time step {dt:g} s is too large for this scenario: use a "
-            f"smaller numerics.dt (estimated limit {stable_dt:.3g} s)."
-        )
+        warnings.append(_divergence_message(scenario, nt * dt, stable_dt))
     events = _contact_events(run.events)
     if run.n_events:
         warnings.append(_contact_loss_message(events, run.n_events))
@@ -486,6 +481,44 @@ def simulate(
         n_rail_modes=track.omega2.size,
         rail_length_m=track.length,
         speed_m_s=wheels.speed,
+    )
+
+
+def _divergence_message(scenario: Scenario, t_stop: float, stable_dt: float) -> str:
+    """Why the integration stopped at ``t_stop`` and what to change: the time step only where
+    it exceeds the estimated limit, else the wheel–rail forces beyond what the limit assumes."""
+    dt = scenario.numerics.dt
+    stopped = (
+        f"the integration diverged at t = {t_stop:.4g} s (a wheel–rail compression passed "
+        f"{DIVERGENCE_COMPRESSION * 1e3:g} mm or became non-finite) and was stopped; the record "
+        "ends there"
+    )
+    if dt > stable_dt:
+        return (
+            f"{stopped}: numerics.dt = {dt:g} s is above the estimated stability limit "
+            f"{stable_dt:.3g} s; use a smaller numerics.dt"
+        )
+    overload = HERTZ_OVERLOAD * scenario.vehicle.static_wheel_load
+    below = (
+        f"{stopped}: numerics.dt = {dt:g} s is already below the estimated stability limit "
+        f"{stable_dt:.3g} s, which holds for wheel–rail forces up to {HERTZ_OVERLOAD:g} × the "
+        f"static wheel load ({overload / 1e3:.0f} kN); "
+    )
+    irregularity = scenario.irregularity
+    if not irregularity.enabled:
+        return (
+            below + "on a smooth rail, forces far beyond that point to an unusual combination of "
+            "vehicle and track parameters: a smaller numerics.dt may carry the run through"
+        )
+    if irregularity.profile_csv:
+        source = (
+            f"the amplitudes of the measured profile irregularity.profile_csv = "
+            f"{irregularity.profile_csv!r} (and the unit in its header, eta_m or eta_mm)"
+        )
+    else:
+        source = "irregularity.track_class and irregularity.wavelength_min"
+    return (
+        below + f"forces far beyond that come from an implausible rail irregularity: check {source}"
     )
 
 
