@@ -38,8 +38,7 @@ FE_RESULTS_DIR = Path(os.environ.get("TUNNELSETTLE_FE_RESULTS", "fe_results"))
 """Where ``python -m model fe --out`` results are looked up for the depth plot (relative to the
 server's working directory unless absolute)."""
 
-OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
-"""The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
+OTHER_MODEL = plots.OTHER_MODEL
 
 # The other model's run waits this long after the results are shown, and is skipped if the
 # user has changed an input by then: the chosen model's plots come first.
@@ -209,8 +208,10 @@ class SessionRuns(param.Parameterized):
         return {"other_model": self.other_model, "fe_result": self.fe_result}
 
     def close(self) -> None:
-        """Drop the results of a closed session."""
-        self.results = self.other_model = self.fe_result = None
+        """Drop the results of a closed session (telling no watcher: the page is gone)."""
+        with param.discard_events(self):
+            self.results = self.other_model = None
+        self.fe_result = None
 
     # ---- computing ----------------------------------------------------------------------------
     async def _drain(self) -> None:
