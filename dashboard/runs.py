@@ -39,6 +39,7 @@ FE_RESULTS_DIR = Path(os.environ.get("TUNNELSETTLE_FE_RESULTS", "fe_results"))
 server's working directory unless absolute)."""
 
 OTHER_MODEL = plots.OTHER_MODEL
+"""Per tunnel–soil model, the other one (drawn faint beside it on the depth plot)."""
 
 # The other model's run waits this long after the results are shown, and is skipped if the
 # user has changed an input by then: the chosen model's plots come first.

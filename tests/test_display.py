@@ -4,11 +4,13 @@ model and inputs, the study's plan and partial results."""
 
 from __future__ import annotations
 
+import contextlib
 import html
 
 import holoviews as hv
 import numpy as np
 import pandas as pd
+import param
 import pytest
 
 from dashboard import plots
@@ -170,3 +172,50 @@ def test_a_cancelled_study_is_partial_and_covers_every_point():
     assert sorted(order) == list(range(45))
     first_third = {index // 9 for index in order[:15]}
     assert first_third == set(range(5))
+
+
+@pytest.mark.parametrize("panel_first", [False, True])
+def test_a_closed_session_lets_go_of_its_page_whatever_was_cleaned_up_first(
+    cheap_scenario, cache, panel_first
+):
+    """The server runs a closed session's clean-ups in no set order: the dashboard's close
+    after Panel's own destroyed the page's models failed ("ReactiveHTML … data doesn't have a
+    value set") and stopped half-way, and each plot pane told to show nothing logged "could not
+    be replaced with new model Spacer". It now drops its results without touching the page,
+    and nothing is left holding the dashboard."""
+    import gc
+    import weakref
+
+    from bokeh.document import Document
+    from panel.io.document import _cleanup_doc
+    from panel.io.state import set_curdoc
+
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    document = Document()
+    with set_curdoc(document):
+        board.template().server_doc(document)
+        board.refresh()
+        board.tabs.active = 1  # the long-term plots are drawn too
+        assert board.runs.results is not None and board.longterm.drawn
+        if panel_first:
+            _cleanup_doc(document)
+        with warnings_as_errors():
+            board.close()
+        if not panel_first:
+            _cleanup_doc(document)
+    assert board.runs.results is None and board.passage.plots.streams == {}
+    released = weakref.ref(board)
+    del board, document  # what the server drops of a closed session
+    gc.collect()
+    assert released() is None
+
+
+@contextlib.contextmanager
+def warnings_as_errors():
+    """Param's warnings (Panel logs them) raise inside the block."""
+    before = param.parameterized.warnings_as_exceptions
+    param.parameterized.warnings_as_exceptions = True
+    try:
+        yield
+    finally:
+        param.parameterized.warnings_as_exceptions = before
