@@ -16,7 +16,7 @@ import html
 import logging
 import os
 from collections.abc import Sequence
-from concurrent.futures import Executor, Future
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Protocol
 
@@ -179,7 +179,7 @@ class SessionRuns(param.Parameterized):
         if self.threaded:
             pn.state.execute(self._drain)
         else:
-            asyncio.run(self._drain())
+            _run_to_end(self._drain())
 
     def show_cached(self) -> bool:
         """Draw the scenario's results at once, without a run in the pool, when the stage
@@ -371,3 +371,15 @@ class SessionRuns(param.Parameterized):
             f"{html.escape(other)} on the depth plot: {self.comparison_state}</span>"
         )
         return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
+
+
+def _run_to_end(coroutine) -> None:
+    """Run ``coroutine`` to its end before returning; where this thread already runs an event
+    loop (a Jupyter kernel's), on a loop of its own in a helper thread."""
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        asyncio.run(coroutine)
+        return
+    with ThreadPoolExecutor(max_workers=1) as helper:
+        helper.submit(asyncio.run, coroutine).result()

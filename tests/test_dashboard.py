@@ -4,6 +4,7 @@ All runs use a cheap scenario (single bogie at 100 km/h, 11 output depths) and t
 pipeline; one stage cache per module keeps repeated stages out of the test time.
 """
 
+import asyncio
 import datetime
 import html
 import io
@@ -242,6 +243,20 @@ def test_first_refresh_fills_every_plot_and_the_summary(dashboard):
     assert 'data-key="peak_disp_invert"' in dashboard.passage.summary.object
     assert dashboard.runs.render_counts == dict.fromkeys(STAGES, 1)
     assert dashboard.report_button.disabled is False
+
+
+def test_a_change_computes_before_it_returns_inside_a_running_event_loop(cache, cheap_scenario):
+    """A Jupyter kernel runs an event loop in the notebook's thread (docs/dashboard.ipynb): a
+    dashboard without a server still has its results when a change returns."""
+
+    async def in_a_notebook():
+        board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+        board.refresh()
+        board.inputs.controls["train.speed_kmh"].enter("90")
+        return board.runs.results
+
+    results = asyncio.run(in_a_notebook())
+    assert results is not None and results.scenario.train.speed_kmh == 90
 
 
 def test_speed_change_updates_every_plot(dashboard):
