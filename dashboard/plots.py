@@ -60,12 +60,22 @@ LEGEND_LABEL_CHARS = 30
 pinned runs. Bokeh does not wrap a legend: a wider one widened its figure and the page."""
 
 
+LEGEND_SPACING_PX = 16
+"""Space between a legend's entries (px)."""
+
+
 def legend_options(labels: Sequence[str]) -> dict:
     """Legend below the axes (never over the data), in as many columns (at most 3) as fit
-    the narrowest plot (about 7 px per character and 40 px per entry's line and gap)."""
+    the narrowest plot (about 7 px per character and 40 px per entry's line and gap), the
+    columns :data:`LEGEND_SPACING_PX` apart (Bokeh's default 3 px ran one entry's label into
+    the next one's line)."""
     longest = max((len(label) for label in labels), default=1)
-    columns = int(PLOT_MIN_WIDTH // (7 * longest + 40))
-    return {"legend_position": "bottom", "legend_cols": max(1, min(3, columns))}
+    columns = int(PLOT_MIN_WIDTH // (7 * longest + 40 + LEGEND_SPACING_PX))
+    return {
+        "legend_position": "bottom",
+        "legend_cols": max(1, min(3, columns)),
+        "legend_opts": {"spacing": LEGEND_SPACING_PX},
+    }
 
 
 def legend_labels(names: Sequence[str]) -> list[str]:

@@ -76,6 +76,16 @@ def test_long_legend_names_are_cut_and_stay_distinct():
     assert plots.legend_options(["mean", "min–max of 3 seeds"])["legend_cols"] >= 1
 
 
+def test_legend_entries_side_by_side_keep_apart():
+    """The defect: in a legend of two columns one entry's label ran into the next one's line
+    ("Vehicle–track model– – Winkler beam"); the rendered legend spaces its entries."""
+    options = plots.legend_options(["Current run", "Winkler beam"])
+    overlay = hv.Curve([0, 1], label="Current run") * hv.Curve([1, 0], label="Winkler beam")
+    (legend,) = hv.render(overlay.opts(**options), backend="bokeh").legend
+    assert legend.ncols == options["legend_cols"] >= 2
+    assert legend.spacing == plots.LEGEND_SPACING_PX >= 10
+
+
 @pytest.fixture(scope="module")
 def cheap_results(cheap_scenario, cache):
     return run(cheap_scenario(), cache=cache)
