@@ -121,7 +121,10 @@ class StudyView(pn.viewable.Viewer):
         )
         self.start_button = pn.widgets.Button(label="Start study", color="primary")
         self.cancel_button = pn.widgets.Button(label="Cancel", color="warning", disabled=True)
-        self.progress = pn.indicators.Progress(value=0, max=1, sizing_mode="stretch_width")
+        # shown from the first Start on (an empty bar before it read as a broken widget)
+        self.progress = pn.indicators.Progress(
+            value=0, max=1, sizing_mode="stretch_width", visible=False
+        )
         self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
         self.plan = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["study-plan"])
         """How many runs Start will compute and about how long they take."""
@@ -272,7 +275,7 @@ class StudyView(pn.viewable.Viewer):
         self._rows = []
         self.table = None
         self.plots.objects, self._slot_names = [], []
-        self.progress.param.update(value=0, max=n_runs)
+        self.progress.param.update(value=0, max=n_runs, visible=True)
         self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
         self.running = True
         self.start_button.disabled, self.cancel_button.disabled = True, False

@@ -139,9 +139,10 @@ def test_one_parameter_study_draws_mean_and_band(view):
     view.first_range.value = (90.0, 100.0)
     view.first_points.value = 2
     view.seeds.value = 2
+    assert not view.progress.visible  # no empty bar before the first Start
     view.start()
     assert not view.running and view.status.object.startswith("Done: 4 of 4 runs")
-    assert view.progress.value == 4 == view.progress.max
+    assert view.progress.value == 4 == view.progress.max and view.progress.visible
     table = view.table
     bands = aggregate(table)
     band, depth = view.plots.objects[0].object[()], view.plots.objects[-1].object[()]
