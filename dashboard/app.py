@@ -25,6 +25,7 @@ from dashboard.ground_view import GroundView
 from dashboard.inputs import InputsPanel
 from dashboard.longterm_view import LongTermView
 from dashboard.messages import Messages
+from dashboard.page import PAGE_CSS, close_drawer_in_narrow_windows
 from dashboard.passage_view import PassageView
 from dashboard.report import report_button
 from dashboard.runs import SessionRuns
@@ -92,7 +93,9 @@ class Dashboard(pn.viewable.Viewer):
         self.runs.views = (self.passage, self.longterm, self.ground)
         self.study = StudyView(scenario_source=lambda: self.scenario.copy())
         self.report_button = report_button(
-            results=lambda: self.runs.results, scenario_name=lambda: self.inputs.preset_select.value
+            results=lambda: self.runs.results,
+            scenario_name=lambda: self.inputs.preset_select.value,
+            other_model=lambda: self.runs.other_model,
         )
         self.runs.param.watch(self._on_results, "results")
         self.runs.param.watch(self._on_other_model, "other_model")
@@ -131,16 +134,16 @@ class Dashboard(pn.viewable.Viewer):
         return [*self.inputs.sidebar(), self.report_button]
 
     def main(self) -> list[pn.viewable.Viewable]:
-        """Main area: run progress, status and messages above the tabs of views."""
+        """Main area: run progress, status and messages above the tabs of views, each a root
+        of its own in the page. The tabs inside a Column with these lost their long-term plots'
+        layout (titles, tick labels, axis positions) each time the calibration drew its first
+        plot: the browser test of an upload checks it."""
         return [
-            pn.Column(
-                self.runs.progress_box,
-                self.runs.status,
-                self.messages.error_alert,
-                self.messages.warning_alert,
-                self.tabs,
-                sizing_mode="stretch_width",
-            )
+            self.runs.progress_box,
+            self.runs.status,
+            self.messages.error_alert,
+            self.messages.warning_alert,
+            self.tabs,
         ]
 
     def __panel__(self) -> pn.viewable.Viewable:
@@ -159,6 +162,7 @@ class Dashboard(pn.viewable.Viewer):
             main=self.main(),
             sidebar_width=320,
             header_background="#1f6f8b",
+            raw_css=[PAGE_CSS],  # the sidebar is a drawer in a narrow window
         )
 
     # ---- connections ------------------------------------------------------------------------
@@ -199,6 +203,7 @@ def serve_session() -> Dashboard:
     drawn = dashboard.runs.show_cached()
     pn.state.onload(dashboard.runs.compute_waiting if drawn else dashboard.refresh)
     pn.state.on_session_destroyed(lambda _context: dashboard.close())
+    close_drawer_in_narrow_windows(pn.state.curdoc)
     with pn.io.hold(freeze=True):  # the page's ~20 roots are indexed once, not each
         dashboard.template().servable()
     return dashboard

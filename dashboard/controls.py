@@ -3,9 +3,12 @@
 A control shows and takes its parameter in the parameter's display unit
 (:func:`model.params.display_unit`: MPa, MN/m, GPa, …) while the parameter itself stays SI. It
 is bound to the parameter object both ways: it follows every change of the parameter (preset,
-loaded file, train type) and sets the parameter when the user edits it. A refused edit (text
-that is not a number, a value outside the hard bounds) changes nothing — not the parameter, not
-the slider's range — and its message goes to the ``report`` callback, for the page to show.
+loaded file, train type) and sets the parameter when the user edits it. Typed text is read by
+:func:`dashboard.typed_values.parse_typed` (a decimal comma, a unit of the same kind:
+``6000 kPa`` in a box shown in MPa). A refused edit (text that is not a number, a value outside
+the hard bounds) changes nothing — not the parameter, not the slider's range: its message is
+shown beside the field, which keeps the typed text to correct, and goes to the ``report``
+callback; :meth:`ParameterControl.clear_refusal` puts the value in force back.
 
 Why not ``pn.widgets.X.from_param`` / ``pn.Param``: those bind a widget to the SI value (no unit
 conversion), and a refused value raises inside the watcher (server log, nothing in the page).
@@ -13,12 +16,14 @@ conversion), and a refused value raises inside the watcher (server log, nothing 
 
 from __future__ import annotations
 
+import html
 import math
 from collections.abc import Callable
 
 import panel as pn
 import param
 
+from dashboard.typed_values import parse_typed
 from model.params import display_label, display_range, display_unit, parameter_of
 
 SLIDER_POSITIONS = 200
@@ -29,6 +34,16 @@ SIGNIFICANT_DIGITS = 12
 
 Report = Callable[[str, "str | None"], None]
 """``report(path, message)``: a refused edit's message, or None once the parameter accepted one."""
+
+REFUSAL_STYLES = {
+    "color": "#82071e",
+    "background": "#ffebe9",
+    "border": "1px solid #ff818266",
+    "border-radius": "6px",
+    "padding": "2px 8px",
+    "font-size": "12px",
+}
+"""The message of a refused edit, right under its field."""
 
 
 def clean_number(value: float) -> float:
@@ -111,9 +126,20 @@ class ParameterControl(pn.viewable.Viewer):
                 self.slider = self._make_slider(value)
                 self.slider.param.watch(self._on_slide, "value_throttled")
                 root.append(self.slider)
-        self._root = pn.Column(*root, css_classes=css, sizing_mode="stretch_width", margin=0)
+        self.refusal = pn.pane.HTML(
+            "",
+            visible=False,
+            styles=REFUSAL_STYLES,
+            margin=(2, 10, 6, 10),
+            sizing_mode="stretch_width",
+            css_classes=["param-refusal"],
+        )
+        """The message of a refused edit, beside the field (hidden while there is none)."""
         if isinstance(p, param.Boolean):
-            self._root = pn.Row(*root, css_classes=css, sizing_mode="stretch_width", margin=0)
+            root = [pn.Row(*root, sizing_mode="stretch_width", margin=0)]
+        self._root = pn.Column(
+            *root, self.refusal, css_classes=css, sizing_mode="stretch_width", margin=0
+        )
         owner.param.watch(self._follow, self.name_in_owner)
 
     # ---- values in display units --------------------------------------------------------------
@@ -176,21 +202,18 @@ class ParameterControl(pn.viewable.Viewer):
             self._set(event.new, typed=str(event.new))
 
     def _parse(self, text: str):
-        """Display value of typed text; an optional trailing display unit is accepted."""
+        """Display value of typed text (:func:`~dashboard.typed_values.parse_typed`)."""
         stripped = text.strip()
         if not stripped and self.parameter.allow_None:
             return None
-        if self.unit and stripped.endswith(self.unit):
-            stripped = stripped[: -len(self.unit)].strip()
-        kind = "whole number" if isinstance(self.parameter, param.Integer) else "number"
+        whole = isinstance(self.parameter, param.Integer)
         try:
-            number = float(stripped)
-        except ValueError:
-            number = math.nan
-        if math.isnan(number) or (kind == "whole number" and not number.is_integer()):
-            unit = f" in {self.unit}" if self.unit and self.unit != "-" else ""
-            raise ValueError(f"{self.path} = {text!r} is not a {kind}{unit} ({self.label})")
-        return int(number) if kind == "whole number" else number
+            number = parse_typed(stripped, self.unit)
+            if whole and not number.is_integer():
+                raise ValueError("is not a whole number")
+        except ValueError as error:
+            raise ValueError(f"{self.path} = {text.strip()!r} {error}") from None
+        return int(number) if whole else number
 
     def _set(self, value, typed: str) -> None:
         """Set the parameter from a display value; refuse it with a message in display units."""
@@ -203,23 +226,49 @@ class ParameterControl(pn.viewable.Viewer):
         try:
             self.owner.param.update({self.name_in_owner: si})
         except ValueError as error:
-            message = str(error)
-            if self.factor != 1.0:
-                message = (
-                    f"{self.path} = {typed} {self.unit} is outside the allowed range "
-                    f"{display_range(self.path)} ({self.label})"
-                )
-            self._refuse(message)
+            if not numeric:  # a choice or a switch: the parameter's own reason
+                self._refuse(str(error))
+                return
+            shown = self._with_unit(format_value(value, self.parameter))
+            as_typed = (
+                "" if typed in (shown, format_value(value, self.parameter)) else f" ({typed})"
+            )
+            self._refuse(
+                f"{self.path} = {shown}{as_typed} is outside the allowed range "
+                f"{display_range(self.path)}"
+            )
             return
         self._show(self.value)
 
     def _refuse(self, message: str) -> None:
-        """Report a refused edit and show the value still in force (slider range untouched)."""
+        """Show a refused edit's message beside the field, which keeps the typed text; the
+        parameter and the slider keep the value in force."""
+        in_force = (
+            "automatic"
+            if self.value is None
+            else self._with_unit(format_value(self.value, self.parameter))
+        )
+        self.refusal.param.update(object=html.escape(f"{message}; still {in_force}"), visible=True)
         self._report(self.path, message)
-        self._show(self.value)
+
+    def _with_unit(self, text: str) -> str:
+        """``text`` followed by the display unit (none for plain numbers)."""
+        return f"{text} {self.unit}" if self.unit and self.unit != "-" else text
+
+    @property
+    def refused(self) -> bool:
+        """True while the field shows a refused edit."""
+        return self.refusal.visible
+
+    def clear_refusal(self) -> None:
+        """Hide the message of a refused edit and show the value in force again."""
+        if self.refusal.visible:
+            self.refusal.param.update(object="", visible=False)
+            self._show(self.value)
 
     # ---- following the parameter ----------------------------------------------------------
     def _follow(self, event: param.parameterized.Event) -> None:
+        self.refusal.param.update(object="", visible=False)  # a new value in force
         self._show(self.value)
 
     def _show(self, value) -> None:

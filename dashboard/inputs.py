@@ -3,7 +3,8 @@ per parameter (the main ones up front, the rest in collapsible groups) and the s
 
 They edit the session's :class:`~model.params.Scenario` in place; controls come from the
 parameters (:mod:`dashboard.controls`), presets and train types from :mod:`model.scenarios`.
-A refused value or a bad file is reported in the page's messages (:mod:`dashboard.messages`).
+A refused value is reported beside its field until the next accepted change; a bad file in
+the page's messages (:mod:`dashboard.messages`).
 """
 
 from __future__ import annotations
@@ -90,7 +91,6 @@ class InputsPanel:
         self._on_change = on_change
         self._replacing = False
         self._quiet = False
-        self._refused: dict[str, str] = {}
 
         self.controls = {
             f"{section}.{name}": ParameterControl(obj, f"{section}.{name}", self._on_refusal)
@@ -114,9 +114,10 @@ class InputsPanel:
         )
         self.preset_select.param.watch(self._on_preset, "value")
         self.preset_note = pn.pane.HTML(
-            _note_html(self._preset_descriptions.get(preset, "")),
+            self._preset_note(preset),
             margin=(0, 10),
             sizing_mode="stretch_width",
+            css_classes=["preset-note"],
         )
         self.train_type = pn.widgets.Select(
             label="Train type",
@@ -184,7 +185,7 @@ class InputsPanel:
             self.scenario.update(scenario.to_dict())
         finally:
             self._replacing = False
-        self._refused.clear()
+        self._clear_refusals()
         self.messages.clear_error()
         self._after_change()
 
@@ -200,20 +201,33 @@ class InputsPanel:
         self._on_change()
 
     def _on_refusal(self, path: str, message: str | None) -> None:
-        """A control refused an edit (message) or accepted one (None)."""
+        """A control refused an edit (its message is beside it) or took one (None): the
+        messages of earlier refusals go, their fields show the values in force again."""
         if message is None:
-            if self._refused.pop(path, None) is not None or not self._refused:
-                self.messages.clear_error()
-            return
-        self._refused[path] = message
-        self.messages.show_error("Value not accepted:", [message])
+            self._clear_refusals()
+
+    def _clear_refusals(self) -> None:
+        """Hide every refused edit's message."""
+        for control in self.controls.values():
+            control.clear_refusal()
+
+    def _preset_note(self, preset: str) -> str:
+        """The preset's description; for custom inputs, which preset they started from."""
+        if preset == scenarios.CUSTOM:
+            return _note_html(
+                f"Custom inputs: some differ from every preset (started from {self.base_preset})."
+            )
+        return _note_html(self._preset_descriptions.get(preset, ""))
 
     def _on_preset(self, event: param.parameterized.Event) -> None:
         """Replace every input by the chosen preset's."""
+        if event.new != scenarios.CUSTOM and not self._quiet:
+            self.base_preset = event.new
+        note = self._preset_note(event.new)  # it follows quiet changes too
+        if note != self.preset_note.object:  # each update of the pane re-indexes the page
+            self.preset_note.object = note
         if self._quiet or event.new == scenarios.CUSTOM:
             return
-        self.preset_note.object = _note_html(self._preset_descriptions.get(event.new, ""))
-        self.base_preset = event.new
         self.replace_scenario(Scenario.preset(event.new))
 
     def _on_train_type(self, event: param.parameterized.Event) -> None:

@@ -18,9 +18,10 @@ import holoviews as hv
 import numpy as np
 import panel as pn
 import param
+from bokeh.models import CustomJSTickFormatter
 
 from dashboard.plot_panes import PlotPanes, PlotsView
-from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
+from dashboard.plots import MM, PLOT_MIN_WIDTH, PLOT_OPTIONS, PlotSpec, legend_options
 from dashboard.site_view import (
     DEFAULT_YEARS,
     SITE_PLOTS,
@@ -40,14 +41,37 @@ from model.pipeline import Results
 KPA = 1e-3  # Pa → kPa
 DEPTH = hv.Dimension("depth", label="Depth below the invert", unit="m")
 FIT_CURVE_POINTS = 50
+DEPTH90_LABEL = "90 % of the settlement above"
+
+_FOLLOW_DATA = {"framewise": True}
 
 
-def _depth90_line(results: Results) -> hv.HLine:
-    """Horizontal line at the depth holding 90 % of the settlement (nothing drawn if NaN)."""
+def compact_ticks() -> CustomJSTickFormatter:
+    """Tick labels with at most four significant digits and no trailing zeros (0.0005, not
+    the "5.000e-4" of Bokeh's default formatter on small strains); a new model per plot (a
+    Bokeh model belongs to one page)."""
+    return CustomJSTickFormatter(code="return String(Number(tick.toPrecision(4)));")
+
+
+def _depth_plot_options() -> dict:
+    """Options of a plot against depth: depth down, the x padding that keeps the peak under
+    the invert off the plot's edge, compact ticks. (Each layer carries framewise: on an
+    Overlay it is ignored, and the axes kept the first run's range.)"""
+    return {"invert_yaxis": True, "padding": (0.06, 0.02), "xformatter": compact_ticks()}
+
+
+def _depth90_line(results: Results, values: np.ndarray, x_dim: hv.Dimension) -> list[hv.Curve]:
+    """The depth holding 90 % of the settlement across the range of ``values`` (dimension
+    ``x_dim``; a Curve, so that it has a legend entry; nothing when that depth is undefined)."""
     depth90 = results.longterm.depth90_m
-    return hv.HLine(depth90 if np.isfinite(depth90) else np.nan, label="90 % of S above").opts(
-        color="grey", line_dash="dotted"
-    )
+    if not np.isfinite(depth90):
+        return []
+    x = [float(np.nanmin(values)), float(np.nanmax(values))]
+    return [
+        hv.Curve((x, [depth90, depth90]), kdims=[x_dim], vdims=[DEPTH], label=DEPTH90_LABEL).opts(
+            color="grey", line_dash="dotted", line_width=1.5, **_FOLLOW_DATA
+        )
+    ]
 
 
 def strain_depth_plot(results: Results) -> hv.Overlay:
@@ -56,11 +80,13 @@ def strain_depth_plot(results: Results) -> hv.Overlay:
     strain = hv.Dimension("strain", label="Permanent strain ε_p", unit="%")
     curve = hv.Curve(
         (lt.strain_percent, lt.depth_m), kdims=[strain], vdims=[DEPTH], label="ε_p"
-    ).opts(line_width=2)
-    return (curve * _depth90_line(results) * layer_boundary_lines(results)).opts(
+    ).opts(line_width=2, **_FOLLOW_DATA)
+    layers = [curve, *_depth90_line(results, lt.strain_percent, strain)]
+    layers.append(layer_boundary_lines(results))
+    return hv.Overlay(layers).opts(
         title=f"Permanent strain after {results.scenario.longterm.years:g} years",
-        invert_yaxis=True,
-        legend_position="bottom_right",
+        **_depth_plot_options(),
+        **legend_options([layer.label for layer in layers if layer.label]),
         **PLOT_OPTIONS,
     )
 
@@ -79,14 +105,20 @@ def stress_ratio_depth_plot(results: Results) -> hv.Overlay:
         kdims=[ratio],
         vdims=[DEPTH, deviator, strength],
         label="q_d/σ_s",
-    ).opts(line_width=2)
-    layers = curve * _depth90_line(results) * layer_boundary_lines(results)
+    ).opts(line_width=2, **_FOLLOW_DATA)
+    layers = [curve, *_depth90_line(results, lt.stress_ratio, ratio)]
     if lt.stress_ratio.max() > 0.5:
-        layers = layers * hv.VLine(1.0, label="failure (laws not valid)").opts(color="red")
-    return layers.opts(
+        depths = [float(lt.depth_m.min()), float(lt.depth_m.max())]
+        layers.append(
+            hv.Curve(
+                ([1.0, 1.0], depths), kdims=[ratio], vdims=[DEPTH], label="failure (laws not valid)"
+            ).opts(color="red", **_FOLLOW_DATA)
+        )
+    layers.append(layer_boundary_lines(results))
+    return hv.Overlay(layers).opts(
         title="Dynamic deviator over static strength",
-        invert_yaxis=True,
-        legend_position="bottom_right",
+        **_depth_plot_options(),
+        **legend_options([layer.label for layer in layers if layer.label]),
         **PLOT_OPTIONS,
     )
 
@@ -138,7 +170,7 @@ def calibration_plot(data: TriaxialData, fit: dict[str, float]) -> hv.Overlay:
         title=f"Calibration ({data.source}): ε_p = a (q_d/σ_s)^m N^b",
         logx=True,
         logy=True,
-        legend_position="top_left",
+        **legend_options([layer.label for layer in layers]),  # below: never over the points
         **PLOT_OPTIONS,
     )
 
@@ -237,7 +269,17 @@ class CalibrationPanel(pn.viewable.Viewer):
             "strain_percent, deviator_kPa, strength_kPa, and optionally pore_pressure_kPa with "
             "effective_stress_kPa (or pore_pressure_ratio); lines starting with # are comments."
         )
-        self.plot = pn.pane.HoloViews(None, sizing_mode="stretch_width")
+        # axes not linked: Panel would link this plot's strain axis to the strain plot's of
+        # the same page (same dimension), and redrew the long-term plots without their
+        # titles, tick labels and axis positions on each upload
+        self.plot = pn.pane.HoloViews(
+            None,
+            sizing_mode="stretch_width",
+            linked_axes=False,
+            min_height=PLOT_OPTIONS["height"],
+            min_width=PLOT_MIN_WIDTH,
+            css_classes=["plot", "plot-calibration"],
+        )
         self.file_input.param.watch(self._on_upload, "value")
         self.apply_button.on_click(lambda event: self.apply())
         self.apply_pore_button.on_click(lambda event: self.apply_pore())

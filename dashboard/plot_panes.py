@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterable
 
 import holoviews as hv
 import panel as pn
+import param
 from holoviews.streams import Pipe
 
 from dashboard import plots
@@ -160,9 +161,12 @@ class PlotPanes:
             stream.send(results)
 
     def close(self) -> None:
-        """Drop the plots (a closed session's memory returns at once)."""
+        """Drop the plots of a closed session, without a word to its page: its models may be
+        gone already (the session's other clean-ups run in no set order), and a pane told of
+        a new object would update them (a failing callback in the server log)."""
         for pane in self.panes.values():
-            pane.object = None
+            with param.discard_events(pane):
+                pane.object = None
         self.streams.clear()
 
     def _new_plot(self, spec: plots.PlotSpec, results: Results) -> None:

@@ -54,18 +54,53 @@ PLOT_OPTIONS = {
 # is a normalisation option of each element: set on an Overlay it is ignored (the axes of the
 # overlaid plots stayed at the first run's ranges), so every layer carries it.
 _FOLLOW_DATA = {"framewise": True}
-_LEGEND_OUTSIDE = {"legend_position": "bottom", "legend_cols": 3}  # never over the curves
+
+LEGEND_LABEL_CHARS = 30
+"""A legend entry is cut to this many characters ("…"): the full names are in the list of
+pinned runs. Bokeh does not wrap a legend: a wider one widened its figure and the page."""
+
+
+LEGEND_SPACING_PX = 16
+"""Space between a legend's entries (px)."""
+
+
+def legend_options(labels: Sequence[str]) -> dict:
+    """Legend below the axes (never over the data), in as many columns (at most 3) as fit
+    the narrowest plot (about 7 px per character and 40 px per entry's line and gap), the
+    columns :data:`LEGEND_SPACING_PX` apart (Bokeh's default 3 px ran one entry's label into
+    the next one's line)."""
+    longest = max((len(label) for label in labels), default=1)
+    columns = int(PLOT_MIN_WIDTH // (7 * longest + 40 + LEGEND_SPACING_PX))
+    return {
+        "legend_position": "bottom",
+        "legend_cols": max(1, min(3, columns)),
+        "legend_opts": {"spacing": LEGEND_SPACING_PX},
+    }
+
+
+def legend_labels(names: Sequence[str]) -> list[str]:
+    """Names cut to :data:`LEGEND_LABEL_CHARS` for a legend, still distinct from each other."""
+    labels: list[str] = []
+    for name in names:
+        label = name if len(name) <= LEGEND_LABEL_CHARS else name[: LEGEND_LABEL_CHARS - 1] + "…"
+        base, k = label, 2
+        while label in labels:
+            label, k = f"{base[: LEGEND_LABEL_CHARS - 6]}… ({k})", k + 1
+        labels.append(label)
+    return labels
 
 
 Overlays = Sequence[tuple[str, Results, str]]
 """Pinned runs drawn under the current one: ``(label, results, colour)`` each, bottom first."""
 
-CURRENT_LINE_WIDTH = 2.5  # thicker than the pinned runs', so the current run stands out on top
+CURRENT_LINE_WIDTH = 2  # thicker than the pinned runs', so the current run stands out on top
 PINNED_LINE_WIDTH = 1.5
-# With pinned runs, reference lines and points (Winkler beam, the paper's values) are drawn in
-# dark grey so that every colour of the legend names a run.
+# The current run keeps one style (black, solid) whether runs are pinned, whichever tunnel–soil
+# model is chosen and whether the other model's curve is shown; reference lines and points
+# (Winkler beam, the paper's values) are always dark grey, so that every colour names a run.
 REFERENCE_COLOUR = "#555555"
-OTHER_MODEL_COLOUR = "#888888"  # the other tunnel–soil model: faint, behind the runs
+REFERENCE_LINE_COLOUR = "#888888"  # dashed, lighter: it often runs over the black current run
+OTHER_MODEL_COLOUR = REFERENCE_LINE_COLOUR  # the other tunnel–soil model: faint, behind
 FE_COLOUR = "#8c564b"  # a stored FE result of the same scenario
 
 
@@ -140,15 +175,16 @@ def run_layers(
         Pinned runs, drawn in this order under the current run, all in one
         :func:`pinned_runs_layer` layer.
     """
+    current = []
+    if results is not None:
+        current = [
+            layer(results, CURRENT_LABEL if overlays else label).opts(
+                color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
+            )
+        ]
     if not overlays:
-        return [] if results is None else [layer(results, label)]
-    pinned = pinned_runs_layer(layer, overlays)
-    if results is None:
-        return [pinned]
-    current = layer(results, CURRENT_LABEL).opts(
-        color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
-    )
-    return [pinned, current]
+        return current
+    return [pinned_runs_layer(layer, overlays), *current]
 
 
 PINNED_RUN = hv.Dimension("run", label="Pinned run")
@@ -179,15 +215,18 @@ def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overl
     cached = _PINNED_LAYERS.get(key)
     if cached is not None:
         return cached
-    curves = [_thinned(layer(run, name)) for name, run, _ in overlays]
+    labels = legend_labels([name for name, _, _ in overlays])
+    curves = [
+        _thinned(layer(run, label)) for label, (_, run, _) in zip(labels, overlays, strict=True)
+    ]
     x_dim, y_dim = curves[0].kdims[0], curves[0].vdims[0]
     paths = [
-        {x_dim.name: c.dimension_values(0), y_dim.name: c.dimension_values(1), "run": name}
-        for c, (name, _, _) in zip(curves, overlays, strict=True)
+        {x_dim.name: c.dimension_values(0), y_dim.name: c.dimension_values(1), "run": label}
+        for c, label in zip(curves, labels, strict=True)
     ]
     element = hv.Contours(paths, kdims=[x_dim, y_dim], vdims=[PINNED_RUN]).opts(
         color="run",
-        cmap={name: colour for name, _, colour in overlays},
+        cmap={label: colour for label, (_, _, colour) in zip(labels, overlays, strict=True)},
         line_width=PINNED_LINE_WIDTH,
         show_legend=True,
         **_FOLLOW_DATA,
@@ -213,7 +252,13 @@ def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Elemen
     """The current run's layer alone, or with pinned runs an Overlay with its legend outside."""
     if not overlays:
         return layers[0].opts(**opts, **PLOT_OPTIONS)
-    return hv.Overlay(layers).opts(**opts, **_LEGEND_OUTSIDE, **PLOT_OPTIONS)
+    return hv.Overlay(layers).opts(**opts, **_legend_of(layers, overlays), **PLOT_OPTIONS)
+
+
+def _legend_of(layers: list[hv.Element], overlays: Overlays) -> dict:
+    """:func:`legend_options` for the labels of ``layers`` and of the pinned runs."""
+    labels = [layer.label for layer in layers if not isinstance(layer, hv.Contours)]
+    return legend_options([*labels, *legend_labels([name for name, _, _ in overlays])])
 
 
 BLOCK_DISP = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
@@ -234,12 +279,10 @@ def block_displacement_plot(results: Results | None, *, overlays: Overlays = ())
         winkler = _time_curve(
             vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", BLOCK_DISP, MM
         )
-        if overlays:
-            winkler = winkler.opts(color=REFERENCE_COLOUR)
-        layers.append(winkler.opts(line_dash="dashed", line_width=1.5))
+        layers.append(winkler.opts(color=REFERENCE_LINE_COLOUR, line_dash="dashed", line_width=2))
     return hv.Overlay(layers).opts(
         title="Sleeper (block) displacement",
-        **_LEGEND_OUTSIDE,
+        **_legend_of(layers, overlays),
         **PLOT_OPTIONS,
     )
 
@@ -258,15 +301,23 @@ def invert_load_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.
     return _overlaid(layers, overlays, title="Invert load")
 
 
+PSD_DECADES = 10
+"""A PSD's axis spans this many decades below its peak (100 dB): further down lie only the
+numerical floor (down to 1e-18 of the peak on the paper case), which left the physics in the
+top half of the plot. The curve continues below the axis (cut by it, not removed)."""
+
+
 def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
-    """Log-scale PSD curve from 0 to ``max_frequency_hz``; zero bins are left out of the log."""
+    """Log-scale PSD curve from 0 to ``max_frequency_hz`` with its axis :data:`PSD_DECADES`
+    deep; zero bins are left out of the log."""
     f = np.asarray(f_hz)
     p = np.asarray(psd) * scale
     keep = (f > 0) & (f <= max_frequency_hz) & (p > 0)
+    floor = p[keep].max() * 10.0**-PSD_DECADES if keep.any() else None
     return hv.Curve(
         (f[keep], p[keep]),
         kdims=[hv.Dimension("f", label="Frequency", unit="Hz")],
-        vdims=[value_dim],
+        vdims=[value_dim.clone(range=(floor, None))],
         label=label,
     ).opts(**_FOLLOW_DATA)
 
@@ -296,7 +347,7 @@ def interface_psd_plot(
 ) -> hv.Curve | hv.Overlay:
     """One-sided PSD of the displacement at the ring–soil interface under the invert (an
     Overlay with pinned runs)."""
-    layers = run_layers(_interface_psd_curve, results, "Ring–soil interface", overlays)
+    layers = run_layers(_interface_psd_curve, results, "At the invert", overlays)
     return _overlaid(layers, overlays, title="Interface displacement PSD", logy=True)
 
 
@@ -321,6 +372,9 @@ def _depth_curve(results: Results, label: str) -> hv.Curve:
 MODEL_NAMES = {"2d": "2D section", "2.5d": "2.5D moving load"}
 """Legend names of the tunnel–soil models."""
 
+OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
+"""The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
+
 MODEL_COMPARISON_PLOT = "depth_profile"
 """The plot that also draws the other tunnel–soil model's profile (``other_model``) and a
 stored FE result (``fe_result``)."""
@@ -341,9 +395,8 @@ def depth_profile_plot(
     scenario with the other tunnel–soil model) as a faint dashed curve, and a stored FE result
     of the same scenario (``fe_result``, model.fe) as a dotted curve."""
     reference = paper_reference() if reference is None else reference
-    current_label = "This model"
-    if other_model is not None and results is not None:
-        current_label = MODEL_NAMES[results.scenario.tunnel.model]
+    # the current run is named by its model whether the other model's curve is there or not
+    current_label = "This model" if results is None else MODEL_NAMES[results.scenario.tunnel.model]
     layers = run_layers(_depth_curve, results, current_label, overlays)
     if other_model is not None:
         name = MODEL_NAMES[other_model.scenario.tunnel.model]
@@ -370,13 +423,13 @@ def depth_profile_plot(
             vdims=[DEPTH],
             label=series["label"],
         )
-        if overlays:
-            points = points.opts(color=REFERENCE_COLOUR)
-        layers.append(points.opts(marker=marker, size=10, **_FOLLOW_DATA))
+        layers.append(
+            points.opts(color=REFERENCE_COLOUR, marker=marker, size=9, alpha=0.8, **_FOLLOW_DATA)
+        )
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        **_LEGEND_OUTSIDE,
+        **_legend_of(layers, overlays),
         padding=0.05,
         **PLOT_OPTIONS,
     )
@@ -403,8 +456,18 @@ class SummaryItem:
 
     @property
     def text(self) -> str:
-        """Value with four significant digits and its unit."""
-        return f"{self.value:.4g} {self.unit}"
+        """Value with three significant digits and its unit."""
+        return f"{significant(self.value)} {self.unit}"
+
+
+def significant(value: float, digits: int = 3) -> str:
+    """``value`` to ``digits`` significant digits, trailing zeros kept (0.497, 7.90, 19.9),
+    whole numbers of more digits in full (1234), never in exponent form below 1e6."""
+    if not np.isfinite(value) or value == 0 or abs(value) >= 1e6 or abs(value) < 1e-4:
+        return f"{value:.{digits}g}"
+    if abs(value) >= 10 ** (digits - 1):
+        return f"{value:.0f}"
+    return f"{value:#.{digits}g}"
 
 
 def summary_items(results: Results) -> list[SummaryItem]:

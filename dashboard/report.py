@@ -24,10 +24,12 @@ from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
+from dashboard.controls import clean_number, format_value
 from dashboard.ground_view import GROUND_PLOTS, ground_statement
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
 from dashboard.site_view import layers_html
-from model.pipeline import Results
+from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
+from model.pipeline import Results, SimulationError, StageCache, run
 
 REPORT_TITLE = "tunnelsettle report"
 # Panel's page template links its favicons from a CDN; empty values keep the file offline.
@@ -77,10 +79,61 @@ def report_header(scenario_name: str, when: datetime.datetime | None = None) -> 
     )
 
 
-def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
+def other_model_results(results: Results, cache: StageCache | None = None) -> Results | None:
+    """The run of ``results``' scenario with the other tunnel–soil model, drawn faint on the
+    depth plot as in the dashboard (None if that run fails)."""
+    other = results.scenario
+    other.tunnel.model = plots.OTHER_MODEL[other.tunnel.model]
+    try:
+        return run(other, cache=cache)
+    except (ValueError, SimulationError):
+        return None
+
+
+def inputs_html(scenario: Scenario) -> str:
+    """Every input of ``scenario`` in a table per section, in the dashboard's units (MPa, MN/m,
+    …) with its dotted name."""
+    sections = []
+    for section in SECTIONS:
+        rows = []
+        for name, value in getattr(scenario, section).param.values().items():
+            path = f"{section}.{name}"
+            if name == "name":
+                continue
+            unit, factor = display_unit(path)
+            shown = value
+            if isinstance(value, int | float) and not isinstance(value, bool):
+                shown = format_value(clean_number(value * factor), parameter_of(path))
+            elif value is None:
+                shown = "automatic"
+            rows.append(
+                f"<tr><td>{html.escape(display_label(path))}</td>"
+                f"<td class='value'>{html.escape(str(shown))}</td>"
+                f"<td><code>{path}</code></td></tr>"
+            )
+        sections.append(
+            f"<h4>{html.escape(section)}</h4><table class='inputs'>{''.join(rows)}</table>"
+        )
+    return "".join(sections)
+
+
+INPUTS_CSS = """
+table.inputs { border-collapse: collapse; margin-bottom: 8px; }
+table.inputs td { border-bottom: 1px solid #d0d7de; padding: 2px 10px 2px 0; }
+table.inputs td.value { text-align: right; font-variant-numeric: tabular-nums; }
+"""
+
+
+def build_report(
+    results: Results, scenario_name: str = "custom", other_model: Results | None = None
+) -> pn.Column:
     """Panel layout of the report: header (scenario name, date, version), summary, warnings,
-    every plot (with the ground-vibration section in a half-space) and the full scenario JSON."""
+    every plot (the depth plot with ``other_model``, the other tunnel–soil model's run,
+    computed if not given; the ground-vibration section in a half-space), the inputs in
+    engineering units and the scenario JSON."""
     scenario = results.scenario
+    if other_model is None:
+        other_model = other_model_results(results)
     warnings = "".join(f"<li>{html.escape(w)}</li>" for w in results.warnings)
     warning_block = (
         f'<div class="warnings"><h3>Warnings</h3><ul>{warnings}</ul></div>' if warnings else ""
@@ -100,10 +153,16 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
         stylesheets=[ITEMS_CSS],
         sizing_mode="stretch_width",
     )
+    companions = {"other_model": other_model}
     figures = pn.GridBox(
         *[
             pn.pane.HoloViews(
-                spec.draw(results), sizing_mode="stretch_width", css_classes=[f"plot-{spec.key}"]
+                spec.draw(
+                    results, **(companions if spec.key == plots.MODEL_COMPARISON_PLOT else {})
+                ),
+                sizing_mode="stretch_width",
+                linked_axes=False,
+                css_classes=[f"plot-{spec.key}"],
             )
             for spec in (*plots.PLOTS, *LONGTERM_PLOTS)
         ],
@@ -139,9 +198,12 @@ def build_report(results: Results, scenario_name: str = "custom") -> pn.Column:
         css_classes=["report-layers"],
     )
     scenario_block = pn.pane.HTML(
-        "<h3>Scenario</h3><details open><summary>All inputs (JSON, SI units except "
-        f'km/h)</summary><pre class="scenario-json">{html.escape(results.scenario_json)}'
+        "<h3>Inputs</h3><details open><summary>Every input, in the dashboard's units"
+        f"</summary>{inputs_html(scenario)}</details>"
+        "<details><summary>The same as a scenario file (JSON, SI units except km/h)"
+        f'</summary><pre class="scenario-json">{html.escape(results.scenario_json)}'
         "</pre></details>",
+        stylesheets=[INPUTS_CSS],
         sizing_mode="stretch_width",
     )
     return pn.Column(
@@ -157,9 +219,12 @@ def _packaged_stylesheet(sheet):
     return InlineStyleSheet(css=path.read_text(encoding="utf-8")) if path.exists() else sheet
 
 
-def report_html(results: Results, scenario_name: str = "custom") -> str:
-    """The report as one self-contained HTML document (inline JS and CSS)."""
-    return standalone_html(lambda: build_report(results, scenario_name))
+def report_html(
+    results: Results, scenario_name: str = "custom", other_model: Results | None = None
+) -> str:
+    """The report as one self-contained HTML document (inline JS and CSS); see
+    :func:`build_report`."""
+    return standalone_html(lambda: build_report(results, scenario_name, other_model))
 
 
 def standalone_html(build: Callable[[], pn.viewable.Viewable]) -> str:
@@ -187,15 +252,22 @@ def standalone_html(build: Callable[[], pn.viewable.Viewable]) -> str:
     return buffer.getvalue()
 
 
-def write_report(results: Results, path: Path, scenario_name: str = "custom") -> Path:
+def write_report(
+    results: Results,
+    path: Path,
+    scenario_name: str = "custom",
+    other_model: Results | None = None,
+) -> Path:
     """Write :func:`report_html` to ``path`` (UTF-8) and return the path."""
     path = Path(path)
-    path.write_text(report_html(results, scenario_name), encoding="utf-8")
+    path.write_text(report_html(results, scenario_name, other_model), encoding="utf-8")
     return path
 
 
 def report_button(
-    results: Callable[[], Results], scenario_name: Callable[[], str]
+    results: Callable[[], Results],
+    scenario_name: Callable[[], str],
+    other_model: Callable[[], Results | None] = lambda: None,
 ) -> pn.widgets.FileDownload:
     """The dashboard's "Download HTML report" button.
 
@@ -205,6 +277,8 @@ def report_button(
         Returns the results on screen; called when the button is pressed.
     scenario_name : callable
         Returns the name the report's header gives the scenario.
+    other_model : callable, optional
+        Returns the other tunnel–soil model's run on screen (None: the report computes it).
 
     Returns
     -------
@@ -214,7 +288,11 @@ def report_button(
 
     def report_file() -> io.BytesIO:
         """The report of the results on screen, built when the button is pressed."""
-        return io.BytesIO(report_html(results(), scenario_name()).encode("utf-8"))
+        shown = results()
+        other = other_model()
+        if other is not None and other.scenario.tunnel.model == shown.scenario.tunnel.model:
+            other = None  # not the companion of the results on screen
+        return io.BytesIO(report_html(shown, scenario_name(), other).encode("utf-8"))
 
     return pn.widgets.FileDownload(
         callback=report_file,

@@ -16,7 +16,7 @@ import html
 import logging
 import os
 from collections.abc import Sequence
-from concurrent.futures import Executor, Future
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Protocol
 
@@ -38,8 +38,8 @@ FE_RESULTS_DIR = Path(os.environ.get("TUNNELSETTLE_FE_RESULTS", "fe_results"))
 """Where ``python -m model fe --out`` results are looked up for the depth plot (relative to the
 server's working directory unless absolute)."""
 
-OTHER_MODEL = {"2d": "2.5d", "2.5d": "2d"}
-"""The tunnel–soil model drawn faint beside the chosen one on the depth plot."""
+OTHER_MODEL = plots.OTHER_MODEL
+"""Per tunnel–soil model, the other one (drawn faint beside it on the depth plot)."""
 
 # The other model's run waits this long after the results are shown, and is skipped if the
 # user has changed an input by then: the chosen model's plots come first.
@@ -179,7 +179,7 @@ class SessionRuns(param.Parameterized):
         if self.threaded:
             pn.state.execute(self._drain)
         else:
-            asyncio.run(self._drain())
+            _run_to_end(self._drain())
 
     def show_cached(self) -> bool:
         """Draw the scenario's results at once, without a run in the pool, when the stage
@@ -209,8 +209,10 @@ class SessionRuns(param.Parameterized):
         return {"other_model": self.other_model, "fe_result": self.fe_result}
 
     def close(self) -> None:
-        """Drop the results of a closed session."""
-        self.results = self.other_model = self.fe_result = None
+        """Drop the results of a closed session (telling no watcher: the page is gone)."""
+        with param.discard_events(self):
+            self.results = self.other_model = None
+        self.fe_result = None
 
     # ---- computing ----------------------------------------------------------------------------
     async def _drain(self) -> None:
@@ -369,3 +371,15 @@ class SessionRuns(param.Parameterized):
             f"{html.escape(other)} on the depth plot: {self.comparison_state}</span>"
         )
         return '<div class="stages">Last run: ' + " · ".join(parts) + "</div>"
+
+
+def _run_to_end(coroutine) -> None:
+    """Run ``coroutine`` to its end before returning; where this thread already runs an event
+    loop (a Jupyter kernel's), on a loop of its own in a helper thread."""
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        asyncio.run(coroutine)
+        return
+    with ThreadPoolExecutor(max_workers=1) as helper:
+        helper.submit(asyncio.run, coroutine).result()

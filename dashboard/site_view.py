@@ -153,11 +153,18 @@ SITE_PLOTS = (
 
 TABLE_COLUMNS = LAYER_PROPERTIES
 """The layer table's columns: every layer property, in declaration order."""
-# Six significant digits in plain JavaScript notation (1e-9 m/s stays 1e-9, where a fixed
-# number of decimals showed 0.0), a dash for an optional value left empty (None).
-NUMBER_CELL = HTMLTemplateFormatter(
-    template='<%= (value == null || isNaN(value)) ? "–" : Number(Number(value).toPrecision(6)) %>'
+NUMBER_TEMPLATE = (
+    '<%= (value == null || isNaN(value)) ? "–" : Number(Number(value).toPrecision(6)) %>'
 )
+"""Six significant digits in plain JavaScript notation (1e-9 m/s stays 1e-9, where a fixed
+number of decimals showed 0.0), a dash for an optional value left empty (None)."""
+
+
+def number_cell() -> HTMLTemplateFormatter:
+    """The formatter of a number column, new for each table: a Bokeh model belongs to one page,
+    and a formatter shared at module level held every table (and its closed session's whole
+    dashboard) through the watcher each Tabulator puts on its formatters."""
+    return HTMLTemplateFormatter(template=NUMBER_TEMPLATE)
 
 
 def column_title(name: str) -> str:
@@ -261,7 +268,7 @@ class LayerTable(pn.viewable.Viewer):
             sortable=False,  # the rows are the profile top down: never reordered on screen
             editors=editors,
             formatters={
-                name: NUMBER_CELL for name in TABLE_COLUMNS if name not in ("name", "soil_class")
+                name: number_cell() for name in TABLE_COLUMNS if name not in ("name", "soil_class")
             },
             show_index=False,
             frozen_columns=["name"],

@@ -17,6 +17,7 @@ updated on the session's event loop (``add_next_tick_callback``).
 from __future__ import annotations
 
 import io
+import itertools
 import threading
 import time
 from collections.abc import Callable
@@ -34,8 +35,9 @@ from dashboard.controls import clean_number, slider_step, step_decimals
 from dashboard.study_plots import display_values, finished_rows, plot_slots
 from dashboard.study_report import study_report_html
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
+from model.run_cost import estimate_run
 from model.study.definition import MAX_RUNS_UNCONFIRMED
-from model.study.execution import run_study
+from model.study.execution import machine_workers, run_study
 
 NONE = "(none)"
 EXCLUDED = {"irregularity.seed"}  # varied through the seeds
@@ -119,8 +121,13 @@ class StudyView(pn.viewable.Viewer):
         )
         self.start_button = pn.widgets.Button(label="Start study", color="primary")
         self.cancel_button = pn.widgets.Button(label="Cancel", color="warning", disabled=True)
-        self.progress = pn.indicators.Progress(value=0, max=1, sizing_mode="stretch_width")
+        # shown from the first Start on (an empty bar before it read as a broken widget)
+        self.progress = pn.indicators.Progress(
+            value=0, max=1, sizing_mode="stretch_width", visible=False
+        )
         self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.plan = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["study-plan"])
+        """How many runs Start will compute and about how long they take."""
         self.report_button = pn.widgets.FileDownload(
             callback=self._report_file,
             filename="study_report.html",
@@ -129,12 +136,16 @@ class StudyView(pn.viewable.Viewer):
             sizing_mode="stretch_width",
             css_classes=["study-report"],
         )
-        self.plots = pn.Column(sizing_mode="stretch_width")
+        # beside the controls, or below them in a narrow window (a Row overflowed it)
+        self.plots = pn.Column(sizing_mode="stretch_width", styles={"flex": "1 1 400px"})
         self.first.param.watch(partial(self._on_parameter, self.first_range), "value")
         self.second.param.watch(self._on_second, "value")
         self.start_button.on_click(lambda event: self.start())
         self.cancel_button.on_click(lambda event: self.cancel())
         self._on_parameter(self.first_range, None)
+        for widget in (self.first, self.second, self.first_points, self.second_points, self.seeds):
+            widget.param.watch(lambda event: self.update_plan(), "value")
+        self.update_plan()
         self._cancel = threading.Event()
         self._rows: list[dict] = []
         self._lock = threading.Lock()
@@ -154,13 +165,14 @@ class StudyView(pn.viewable.Viewer):
             self.second_range,
             self.second_points,
             self.seeds,
+            self.plan,
             pn.Row(self.start_button, self.cancel_button),
             self.progress,
             self.status,
             self.report_button,
             width=340,
         )
-        return pn.Row(controls, self.plots, sizing_mode="stretch_width")
+        return pn.FlexBox(controls, self.plots, sizing_mode="stretch_width")
 
     # ---- inputs ---------------------------------------------------------------------------
     def _on_parameter(self, slider: pn.widgets.EditableRangeSlider, event) -> None:
@@ -202,6 +214,45 @@ class StudyView(pn.viewable.Viewer):
             vary[path] = grid_values(path, low, high, points.value)
         return vary
 
+    def n_runs(self) -> int:
+        """Runs of the chosen grid and seeds (ValueError for a grid that cannot be run)."""
+        return int(np.prod([len(v) for v in self.vary().values()])) * self.seeds.value
+
+    def update_plan(self) -> None:
+        """Say how many runs Start computes and about how long, before it is pressed: the
+        mean of :func:`model.run_cost.estimate_run` over the grid's points (a slow train's
+        passage lasts longer), shared by the machine's workers."""
+        try:
+            vary = self.vary()
+            n_runs = self.n_runs()
+            each = self._mean_run_seconds(vary)
+        except (ValueError, TypeError) as error:
+            self.plan.object = f"Cannot start: {error}"
+            return
+        minutes = n_runs * each / machine_workers() / 60.0
+        took = f"about {minutes:.0f} min" if minutes >= 1.5 else "about a minute or less"
+        too_many = (
+            f" — more than {MAX_RUNS_UNCONFIRMED}: use fewer points or seeds"
+            if n_runs > MAX_RUNS_UNCONFIRMED
+            else ""
+        )
+        self.plan.object = (
+            f"**{n_runs} runs**, {took} on {machine_workers()} workers (estimate){too_many}"
+        )
+
+    def _mean_run_seconds(self, vary: dict[str, list]) -> float:
+        """Mean estimated time of one run over the grid (at most 100 of its points)."""
+        points = list(itertools.product(*vary.values()))
+        points = points[:: max(1, len(points) // 100)]
+        base = self.scenario_source()
+        seconds = []
+        for values in points:
+            scenario = base.copy()
+            for path, value in zip(vary, values, strict=True):
+                scenario.set_value(path, value)
+            seconds.append(estimate_run(scenario).total_seconds)
+        return float(np.mean(seconds))
+
     # ---- running --------------------------------------------------------------------------
     def start(self) -> None:
         """Start a study of the current scenario (does nothing while one runs)."""
@@ -210,7 +261,7 @@ class StudyView(pn.viewable.Viewer):
         try:
             vary = self.vary()
             seeds = self._seed_list()
-            n_runs = int(np.prod([len(v) for v in vary.values()])) * len(seeds)
+            n_runs = self.n_runs()
             if n_runs > MAX_RUNS_UNCONFIRMED:
                 raise ValueError(
                     f"{n_runs} runs: at most {MAX_RUNS_UNCONFIRMED} from the dashboard; use "
@@ -224,7 +275,7 @@ class StudyView(pn.viewable.Viewer):
         self._rows = []
         self.table = None
         self.plots.objects, self._slot_names = [], []
-        self.progress.param.update(value=0, max=n_runs)
+        self.progress.param.update(value=0, max=n_runs, visible=True)
         self.status.object = f"Starting {n_runs} runs (cluster start-up takes a few seconds)…"
         self.running = True
         self.start_button.disabled, self.cancel_button.disabled = True, False
@@ -295,6 +346,7 @@ class StudyView(pn.viewable.Viewer):
             rows = list(self._rows)
         if rows:
             table = pd.DataFrame(rows)
+            table.attrs["n_runs"] = self.progress.max  # the plots say they are partial
             self.table = table
             self.progress.value = len(rows)
             self.status.object = f"{len(rows)} of {self.progress.max} runs done"
@@ -339,9 +391,11 @@ class StudyView(pn.viewable.Viewer):
         self.report_button.disabled = outcome.empty
         self.progress.value = len(outcome)
         failed = int((outcome["error"] != "").sum()) if "error" in outcome else 0
-        state = "Cancelled" if outcome.attrs.get("cancelled") else "Done"
+        cancelled = outcome.attrs.get("cancelled")
+        state = "Cancelled" if cancelled else "Done"
         self.status.object = (
             f"{state}: {len(outcome)} of {outcome.attrs.get('n_runs', len(outcome))} runs"
             + (f", {failed} failed" if failed else "")
+            + (" — the plots show this partial result" if cancelled and len(outcome) else "")
         )
         self._draw(self.table)

@@ -327,8 +327,10 @@ class WhatIfPanel(pn.viewable.Viewer):
     def _release(self, session_context) -> None:
         """The browser session closed: let go of every pinned result."""
         self.session.clear()
-        self.runs_list.object = ""
-        self.run_select.options = []
+        # the page's models may be gone already: the widgets let go without updating them
+        with param.discard_events(self.runs_list), param.discard_events(self.run_select):
+            self.runs_list.object = ""
+            self.run_select.param.update(options=[], value=None)
 
     # ---- files --------------------------------------------------------------------------------
     def _session_file(self) -> io.StringIO:

@@ -45,19 +45,24 @@ def test_settlement_plot_stacks_plastic_and_consolidation_in_mm_on_a_log_time_ax
 def test_depth_plots_carry_strain_ratio_and_the_90_percent_depth(results):
     lt = results.longterm
     strain = view.strain_depth_plot(results)
-    (curve,), (line,) = _of_type(strain, hv.Curve), _of_type(strain, hv.HLine)
+    curve, line = _of_type(strain, hv.Curve)
     (boundaries,) = _of_type(strain, hv.HLines)  # the layer boundaries (none: one layer)
     assert len(boundaries) == 0
     np.testing.assert_array_equal(curve.dimension_values("strain"), lt.strain_percent)
     np.testing.assert_array_equal(curve.dimension_values("depth"), lt.depth_m)
-    assert line.data == lt.depth90_m
+    # the 90 % depth is a line across the data with a legend entry (an HLine has none)
+    assert line.label == view.DEPTH90_LABEL
+    np.testing.assert_array_equal(line.dimension_values("depth"), [lt.depth90_m] * 2)
+    np.testing.assert_array_equal(
+        line.dimension_values("strain"), [lt.strain_percent.min(), lt.strain_percent.max()]
+    )
     ratio = view.stress_ratio_depth_plot(results)
-    (ratio_curve,) = _of_type(ratio, hv.Curve)
+    ratio_curve, _ = _of_type(ratio, hv.Curve)
     np.testing.assert_allclose(
         ratio_curve.dimension_values("stress_ratio"), lt.deviator_Pa / lt.strength_Pa
     )
     np.testing.assert_allclose(ratio_curve.dimension_values("deviator"), lt.deviator_Pa / 1e3)
-    assert _of_type(ratio, hv.VLine) == []  # far from failure: no failure line
+    assert len(_of_type(ratio, hv.Curve)) == 2  # far from failure: no failure line
     for element in (strain, ratio):
         hv.render(element, backend="bokeh")
 
@@ -77,8 +82,9 @@ def test_statement_names_law_parameters_results_and_warnings(results):
     failing = run(scenario, cache=None)
     assert "⚠" in view.law_statement(failing)
     assert any("not valid near failure" in warning for warning in failing.warnings)
-    (failure_line,) = _of_type(view.stress_ratio_depth_plot(failing), hv.VLine)
-    assert failure_line.data == 1.0
+    *_, failure_line = _of_type(view.stress_ratio_depth_plot(failing), hv.Curve)
+    assert failure_line.label == "failure (laws not valid)"
+    np.testing.assert_array_equal(failure_line.dimension_values("stress_ratio"), [1.0, 1.0])
 
 
 def test_calibration_plot_has_points_and_fitted_lines_per_level_on_log_axes():

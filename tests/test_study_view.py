@@ -21,7 +21,7 @@ from test_dashboard import EXTERNAL_TAG, _markup_texts
 
 from dashboard import study_view
 from dashboard.export import main as export_main
-from dashboard.study_plots import RESULTS, band_plot, heat_map, study_plots
+from dashboard.study_plots import RESULTS, band_plot, heat_map, study_bands, study_plots
 from dashboard.study_report import study_band_table, study_report_html
 from dashboard.study_view import NONE, StudyView, grid_values, study_parameters
 from model.params import Scenario
@@ -121,8 +121,10 @@ def test_plot_axes_carry_the_display_unit():
         }
     )
     one = table[table["train.speed_kmh"] == 60.0].drop(columns="train.speed_kmh")
-    area, curve = band_plot(aggregate(one), "soil.youngs_modulus", "peak_disp_invert_m").values()
-    for element in (area, curve):
+    curve, points = band_plot(
+        study_bands(one), "soil.youngs_modulus", "peak_disp_invert_m"
+    ).values()
+    for element in (curve, points):  # one seed per point: no band
         assert element.kdims[0].pprint_label == "Soil Young's modulus (MPa)"
         assert list(element.dimension_values(0)) == [4.1, 6.1]
     bands = aggregate(table)
@@ -137,20 +139,30 @@ def test_one_parameter_study_draws_mean_and_band(view):
     view.first_range.value = (90.0, 100.0)
     view.first_points.value = 2
     view.seeds.value = 2
+    assert not view.progress.visible  # no empty bar before the first Start
     view.start()
     assert not view.running and view.status.object.startswith("Done: 4 of 4 runs")
-    assert view.progress.value == 4 == view.progress.max
+    assert view.progress.value == 4 == view.progress.max and view.progress.visible
     table = view.table
     bands = aggregate(table)
     band, depth = view.plots.objects[0].object[()], view.plots.objects[-1].object[()]
-    area, curve = band.values()
+    area, curve, points = band.values()
     np.testing.assert_array_equal(curve.dimension_values(1), bands["peak_disp_invert_m_mean"] * 1e3)
-    np.testing.assert_array_equal(area.dimension_values(1), bands["peak_disp_invert_m_p05"] * 1e3)
-    np.testing.assert_array_equal(area.dimension_values(2), bands["peak_disp_invert_m_p95"] * 1e3)
+    np.testing.assert_array_equal(points.dimension_values(1), curve.dimension_values(1))
+    # two seeds: the band is their whole range, and says so
+    assert area.label == "min–max of 2 seeds"
+    extremes = aggregate(table, band=(0.0, 1.0))
+    np.testing.assert_array_equal(
+        area.dimension_values(1), extremes["peak_disp_invert_m_p00"] * 1e3
+    )
+    np.testing.assert_array_equal(
+        area.dimension_values(2), extremes["peak_disp_invert_m_p100"] * 1e3
+    )
     panes = list(view.plots.objects)
     view._draw(table.iloc[:3])  # fewer rows: same plots, new data, figures kept
     assert view.plots.objects == panes
     assert len(panes[0].object[()].values()[1]) == 2 and panes[0].object[()] is not band
+    assert "(partial: 3 of 4 runs)" in panes[0].object[()].opts.get().kwargs["title"]
     envelope = next(c for c in depth.values() if c.label == "envelope")
     profiles = table[[c for c in table if c.startswith("profile_")]].to_numpy() * 1e3
     np.testing.assert_array_equal(envelope.dimension_values(0), profiles.max(axis=0))
@@ -191,7 +203,7 @@ def test_long_term_settlement_is_drawn_when_the_key_exists():
     )
     titles = [plot.opts.get().kwargs.get("title") for plot in study_plots(table)]
     assert titles == [RESULTS[k] for k in RESULTS]
-    plot = band_plot(aggregate(table), "train.speed_kmh", "longterm_settlement_m")
+    plot = band_plot(study_bands(table), "train.speed_kmh", "longterm_settlement_m")
     np.testing.assert_allclose(plot.values()[1].dimension_values(1), [15.0, 40.0], rtol=1e-12)
     assert isinstance(
         heat_map(

@@ -209,22 +209,54 @@ def execute_study(
     return _table(study, rows, cancelled)
 
 
+SEED_ROUNDS = 3
+"""The runs are submitted in this many rounds, each a share of the seeds at every point: a
+study cancelled after its first round has results across its whole range, not only at its
+first points. More rounds would cover the range sooner, but each round computes the soil
+kernel of every point again (a worker reuses it only between runs of the same point)."""
+
+
+def submission_order(n_points: int, n_seeds: int, rounds: int = SEED_ROUNDS) -> list[int]:
+    """Run indices (study order: point-major, seeds innermost) in the order they are
+    submitted: ``rounds`` rounds, each taking the next block of seeds at every point.
+
+    Parameters
+    ----------
+    n_points, n_seeds : int
+        Points of the study and seeds per point.
+    rounds : int
+        Rounds (at most ``n_seeds``).
+
+    Returns
+    -------
+    list of int
+        A permutation of ``range(n_points * n_seeds)``.
+    """
+    block = -(-n_seeds // max(1, min(rounds, n_seeds)))  # ceil
+    return [
+        point * n_seeds + seed
+        for first in range(0, n_seeds, block)
+        for point in range(n_points)
+        for seed in range(first, min(first + block, n_seeds))
+    ]
+
+
 def _collect(client, study: Study, progress, cancel) -> tuple[dict[int, dict], bool]:
-    """Submit every run, gather rows as they finish; on cancel, stop the rest and wait."""
+    """Submit every run (:func:`submission_order`), gather rows as they finish; on cancel,
+    stop the rest and wait."""
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:12]
-    inputs, futures = [], []
-    for index, (row, scenario_json) in enumerate(study.runs()):
-        inputs.append(row)
-        futures.append(
-            client.submit(
-                run_summary,
-                scenario_json,
-                study.depth_profile,
-                key=f"tunnelsettle-run-{token}-{index}",
-                pure=False,
-            )
+    runs = list(study.runs())
+    inputs = [row for row, _ in runs]
+    futures = [None] * len(runs)
+    for index in submission_order(len(study.points), len(study.seeds)):
+        futures[index] = client.submit(
+            run_summary,
+            runs[index][1],
+            study.depth_profile,
+            key=f"tunnelsettle-run-{token}-{index}",
+            pure=False,
         )
     index_of = {future.key: index for index, future in enumerate(futures)}
     rows: dict[int, dict] = {}
