@@ -142,8 +142,12 @@ class Scratch(NamedTuple):
     """Work arrays of one evaluation of the accelerations (allocated once per run)."""
 
     modal_load: np.ndarray  # (N_m,) Σ_j p_j Y_k(x_j)
-    wheel_offset: np.ndarray  # (2, n_wheels) cos Δ_j, sin Δ_j, Δ_j = π(x0_j − x0_0)/L
-    wheel_work: np.ndarray  # (4, n_wheels) Chebyshev recurrence: 2cos θ_j, start, two terms
+    offset_cos: np.ndarray  # (n_wheels,) cos Δ_j, Δ_j = π(x0_j − x0_0)/L
+    offset_sin: np.ndarray  # (n_wheels,) sin Δ_j
+    two_cos: np.ndarray  # (n_wheels,) 2cos θ_j, the Chebyshev recurrence's factor
+    wheel_first: np.ndarray  # (n_wheels,) its first term
+    wheel_prev: np.ndarray  # (n_wheels,) and its two running terms
+    wheel_cur: np.ndarray  # (n_wheels,)
     rail_at_wheel: np.ndarray  # (n_wheels,) Z_r(x_j)
     fold_disp: np.ndarray  # (N−1,) rail displacement folded onto block modes
     fold_vel: np.ndarray  # (N−1,)

@@ -31,12 +31,20 @@ FAST = {"reassoc", "contract", "nsz", "arcp"}
 
 
 @numba.njit(cache=True)
+def zhai_update(x, v, a, a_prev, dt, phi, psi):
+    """Zhai's explicit step of one variable: (x_{n+1}, v_{n+1}) from x_n, v_n, a_n, a_{n−1}."""
+    h2 = dt * dt
+    return (
+        x + (v * dt + (0.5 + psi) * a * h2 - psi * a_prev * h2),
+        v + ((1.0 + phi) * a * dt - phi * a_prev * dt),
+    )
+
+
+@numba.njit(cache=True)
 def zhai_predict(x, v, a, a_prev, dt, phi, psi):
     """Zhai's explicit update of x, v in place; a_prev takes a_n (a is then recomputed)."""
-    h2 = dt * dt
     for i in range(x.size):
-        x[i] += v[i] * dt + (0.5 + psi) * a[i] * h2 - psi * a_prev[i] * h2
-        v[i] += (1.0 + phi) * a[i] * dt - phi * a_prev[i] * dt
+        x[i], v[i] = zhai_update(x[i], v[i], a[i], a_prev[i], dt, phi, psi)
         a_prev[i] = a[i]
 
 
@@ -206,28 +214,100 @@ def modal_loads(two_cos, first, prev, cur, load):
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def accelerations(t, state, track, vehicle, wheels, scratch):
-    """Accelerations qdd, sdd, udd of the whole system at time t; wheel forces in ``scratch``.
+def paired_modes(track, state, modal_load, rail_disp, rail_vel, block_force, sums, step):
+    """Rail mode r and block mode r, r < min(N_m, N − 1) (ρ = r, σ = +1): accelerations,
+    fastener forces, monitored sums, and Zhai's predictor over ``step`` = (Δt, φ, ψ) if Δt > 0.
+
+    ``rail_disp``, ``rail_vel``: the rail's displacement and velocity folded onto each block
+    mode (q, q̇ themselves when N_m ≤ N − 1). The accelerations a_n replace a_{n−1} in qdd and
+    sdd, which move to qdd_prev and sdd_prev when the state is advanced.
+    """
+    q, qd, qdd, qdd_prev = state.q, state.qd, state.qdd, state.qdd_prev
+    s, sd, sdd, sdd_prev = state.s, state.sd, state.sdd, state.sdd_prev
+    omega2, gain = track.omega2, track.block_gain
+    fastener_k, fastener_c = track.fastener_k, track.fastener_c
+    pad_k, pad_c = track.pad_k, track.pad_c
+    inv_block_mass = 1.0 / track.block_mass
+    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
+    dt, phi, psi = step
+    z_rail = 0.0
+    z_block = 0.0
+    v_block = 0.0
+    for r in range(min(q.size, s.size)):
+        force = fastener_k * (gain * rail_disp[r] - s[r]) + fastener_c * (
+            gain * rail_vel[r] - sd[r]
+        )
+        block_force[r] = force
+        rail_acc = modal_load[r] - omega2[r] * q[r] - gain * force
+        block_acc = (force - pad_k * s[r] - pad_c * sd[r]) * inv_block_mass
+        z_rail += rail_weight[r] * q[r]
+        z_block += block_weight[r] * s[r]
+        v_block += block_weight[r] * sd[r]
+        if dt > 0.0:
+            q[r], qd[r] = zhai_update(q[r], qd[r], rail_acc, qdd[r], dt, phi, psi)
+            s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
+            qdd_prev[r] = qdd[r]
+            sdd_prev[r] = sdd[r]
+        qdd[r] = rail_acc
+        sdd[r] = block_acc
+    sums[0] += z_rail
+    sums[1] += z_block
+    sums[2] += v_block
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def unpaired_modes(track, state, modal_load, block_force, sums, step):
+    """The modes :func:`paired_modes` leaves: block modes r ≥ N_m (N_m < N − 1), which no rail
+    mode meets, and rail modes k ≥ N − 1, folded onto block mode ρ_k with sign σ_k."""
+    q, qd, qdd, qdd_prev = state.q, state.qd, state.qdd, state.qdd_prev
+    s, sd, sdd, sdd_prev = state.s, state.sd, state.sdd, state.sdd_prev
+    fold_index, fold_sign = track.fold_index, track.fold_sign
+    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
+    dt, phi, psi = step
+    n_paired = min(q.size, s.size)
+    for r in range(n_paired, s.size):
+        block_acc = (
+            -(track.fastener_k + track.pad_k) * s[r] - (track.fastener_c + track.pad_c) * sd[r]
+        ) / track.block_mass
+        sums[1] += block_weight[r] * s[r]
+        sums[2] += block_weight[r] * sd[r]
+        if dt > 0.0:
+            s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
+            sdd_prev[r] = sdd[r]
+        sdd[r] = block_acc
+    for k in range(n_paired, q.size):
+        rail_acc = modal_load[k] - track.omega2[k] * q[k]
+        if fold_index[k] >= 0:
+            rail_acc -= fold_sign[k] * track.block_gain * block_force[fold_index[k]]
+        sums[0] += rail_weight[k] * q[k]
+        if dt > 0.0:
+            q[k], qd[k] = zhai_update(q[k], qd[k], rail_acc, qdd[k], dt, phi, psi)
+            qdd_prev[k] = qdd[k]
+        qdd[k] = rail_acc
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def accelerations(t, state, track, vehicle, wheels, scratch, step):
+    """Accelerations of the whole system at time t, then the track's predictor step.
+
+    Sets qdd, sdd, udd (the previous ones move to qdd_prev, sdd_prev when the state is
+    advanced), the wheel forces and compressions in ``scratch`` and the monitored rail and
+    block displacements and block velocity in ``scratch.monitored``. With ``step`` =
+    (Δt, φ, ψ), Δt > 0, Zhai's predictor then takes the rail and block modal coordinates to
+    t + Δt in the same pass over the modes (the vehicle's is :func:`zhai_predict`).
 
     ``wheels.prescribed_load`` (n_wheels,) replaces the Hertz law when its first entry is ≥ 0:
     the moving-constant-load model, with the vehicle at rest (ü = 0, δ reported as 0). It is
     [-1.0] for the coupled vehicle.
     """
-    q, qd, qdd = state.q, state.qd, state.qdd
-    s, sd, sdd = state.s, state.sd, state.sdd
+    q, qd = state.q, state.qd
     u, ud, udd = state.u, state.ud, state.udd
-    omega2, fold_index, fold_sign = track.omega2, track.fold_index, track.fold_sign
-    block_gain, mode_amplitude = track.block_gain, track.mode_amplitude
-    fastener_k, fastener_c = track.fastener_k, track.fastener_c
-    pad_k, pad_c, block_mass = track.pad_k, track.pad_c, track.block_mass
     wheel_x0, speed, prescribed_load = wheels.x0, wheels.speed, wheels.prescribed_load
     rail_at_wheel, modal_load = scratch.rail_at_wheel, scratch.modal_load
-    fold_disp, fold_vel = scratch.fold_disp, scratch.fold_vel
-    block_mode_force = scratch.block_mode_force
     wheel_x, compression, wheel_force = scratch.wheel_x, scratch.compression, scratch.wheel_force
-    two_cos, first = scratch.wheel_work[0], scratch.wheel_work[1]
-    prev, cur = scratch.wheel_work[2], scratch.wheel_work[3]
-    n_modes, n_block_modes = q.size, s.size
+    two_cos, first = scratch.two_cos, scratch.wheel_first
+    prev, cur = scratch.wheel_prev, scratch.wheel_cur
+    offset_cos, offset_sin = scratch.offset_cos, scratch.offset_sin
     n_wheels = wheel_x0.size
     n_dof = vehicle.inv_mass.shape[1]
     wheel_dof = vehicle.wheel_dof
@@ -238,11 +318,10 @@ def accelerations(t, state, track, vehicle, wheels, scratch):
     # trigonometric calls per step, cos and sin of θ_j by the addition formula.
     theta = track.wavenumber_unit * (wheel_x0[0] + speed * t)
     cos_lead, sin_lead = math.cos(theta), math.sin(theta)
-    offset_cos, offset_sin = scratch.wheel_offset[0], scratch.wheel_offset[1]
     for j in range(n_wheels):
         wheel_x[j] = wheel_x0[j] + speed * t
         two_cos[j] = 2.0 * (cos_lead * offset_cos[j] - sin_lead * offset_sin[j])
-        first[j] = mode_amplitude * (sin_lead * offset_cos[j] + cos_lead * offset_sin[j])
+        first[j] = track.mode_amplitude * (sin_lead * offset_cos[j] + cos_lead * offset_sin[j])
     sine_series_at_wheels(q, two_cos, first, prev, cur, rail_at_wheel)
 
     if prescribed_load[0] >= 0.0:  # moving constant loads, no vehicle
@@ -266,55 +345,33 @@ def accelerations(t, state, track, vehicle, wheels, scratch):
         first[j] *= wheel_force[j]
     modal_loads(two_cos, first, prev, cur, modal_load)
 
-    # Track: rail mode k < N meets block mode k alone (ρ = k, σ = +1); modes k ≥ N fold onto
-    # the block modes, through fold_disp and fold_vel (none with the default N_m = N). The
-    # monitored displacements (rail, block and its velocity) are summed on the way.
-    n_direct = min(n_modes, n_block_modes)
-    rail_disp, rail_vel = q, qd
-    if n_modes > n_direct:
-        for r in range(n_block_modes):
+    # Track: rail mode k < N meets block mode k alone; modes k ≥ N fold onto the block modes
+    # (none with the default N_m = N), through fold_disp and fold_vel.
+    monitored = scratch.monitored
+    monitored[:] = 0.0
+    if q.size > state.s.size:
+        fold_disp, fold_vel = scratch.fold_disp, scratch.fold_vel
+        fold_index, fold_sign = track.fold_index, track.fold_sign
+        for r in range(fold_disp.size):
             fold_disp[r] = q[r]
             fold_vel[r] = qd[r]
-        for k in range(n_direct, n_modes):
-            r = fold_index[k]
-            if r >= 0:
-                fold_disp[r] += fold_sign[k] * q[k]
-                fold_vel[r] += fold_sign[k] * qd[k]
-        rail_disp, rail_vel = fold_disp, fold_vel
-    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
-    z_rail = 0.0
-    z_block = 0.0
-    v_block = 0.0
-    for r in range(n_direct):
-        force = fastener_k * (block_gain * rail_disp[r] - s[r]) + fastener_c * (
-            block_gain * rail_vel[r] - sd[r]
+        for k in range(fold_disp.size, q.size):
+            if fold_index[k] >= 0:
+                fold_disp[fold_index[k]] += fold_sign[k] * q[k]
+                fold_vel[fold_index[k]] += fold_sign[k] * qd[k]
+        paired_modes(
+            track, state, modal_load, fold_disp, fold_vel, scratch.block_mode_force, monitored, step
         )
-        block_mode_force[r] = force
-        sdd[r] = (force - pad_k * s[r] - pad_c * sd[r]) / block_mass
-        qdd[r] = modal_load[r] - omega2[r] * q[r] - block_gain * force
-        z_rail += rail_weight[r] * q[r]
-        z_block += block_weight[r] * s[r]
-        v_block += block_weight[r] * sd[r]
-    for r in range(n_direct, n_block_modes):  # block modes without a rail mode (N_m < N − 1)
-        sdd[r] = (-(fastener_k + pad_k) * s[r] - (fastener_c + pad_c) * sd[r]) / block_mass
-        z_block += block_weight[r] * s[r]
-        v_block += block_weight[r] * sd[r]
-    for k in range(n_direct, n_modes):
-        acc = modal_load[k] - omega2[k] * q[k]
-        if fold_index[k] >= 0:
-            acc -= fold_sign[k] * block_gain * block_mode_force[fold_index[k]]
-        qdd[k] = acc
-        z_rail += rail_weight[k] * q[k]
-    monitored = scratch.monitored
-    monitored[0] = z_rail
-    monitored[1] = z_block
-    monitored[2] = v_block
+    else:
+        paired_modes(track, state, modal_load, q, qd, scratch.block_mode_force, monitored, step)
+    unpaired_modes(track, state, modal_load, scratch.block_mode_force, monitored, step)
 
 
 @numba.njit(cache=True, nogil=True)  # releases the GIL: a served dashboard stays responsive
 def advance(
-    step_start,
-    step_stop,
+    out_start,
+    out_stop,
+    n_steps,
     dt,
     phi,
     psi,
@@ -327,18 +384,19 @@ def advance(
     outputs,
     contact,
 ):
-    """Advance the system from step ``step_start`` to ``step_stop`` with Zhai's method.
+    """Outputs ``out_start`` … ``out_stop`` − 1 of a run of ``n_steps`` steps of Zhai's method.
 
-    Step n takes the state at t_n = n·dt to t_{n+1} and writes outputs at index n + 1 (index 0
-    holds the initial state). φ = ψ = 0 on step 0. Loss of contact is logged in
-    ``contact.events`` (rows: wheel, t_start, x_start, t_end) while ``contact.event_count[0]``
-    counts all of them.
+    At output n the accelerations at t_n = n·dt are evaluated and recorded, then (n < n_steps)
+    Zhai's predictor takes the state to t_{n+1}, with φ = ψ = 0 from n = 0; output 0 is the
+    initial state. Loss of contact is logged in ``contact.events`` (rows: wheel, t_start,
+    x_start, t_end; ``contact.in_contact`` starts True, so a wheel off the rail at t = 0 opens
+    an event at 0) while ``contact.event_count[0]`` counts all of them.
 
     Returns
     -------
     int
-        ``RUNNING`` (−1) if all steps were taken, else the index of the first output at which
-        the response diverged (non-finite, or a wheel–rail compression beyond
+        ``RUNNING`` (−1) if all outputs were computed, else the index of the first output at
+        which the response diverged (non-finite, or a wheel–rail compression beyond
         ``divergence_limit`` m; a gap of any size is a wheel in flight, not divergence);
         outputs from that index on are not valid.
     """
@@ -349,15 +407,12 @@ def advance(
     event_capacity = events.shape[0]
     block_force = outputs.block_force
 
-    for step in range(step_start, step_stop):
-        step_phi = 0.0 if step == 0 else phi
-        step_psi = 0.0 if step == 0 else psi
-        zhai_predict(state.q, state.qd, state.qdd, state.qdd_prev, dt, step_phi, step_psi)
-        zhai_predict(state.s, state.sd, state.sdd, state.sdd_prev, dt, step_phi, step_psi)
-        zhai_predict(state.u, state.ud, state.udd, state.udd_prev, dt, step_phi, step_psi)
-        out = step + 1
+    for out in range(out_start, out_stop):
         t = out * dt
-        accelerations(t, state, track, vehicle, wheels, scratch)
+        step_dt = dt if out < n_steps else 0.0
+        step_phi = 0.0 if out == 0 else phi
+        step_psi = 0.0 if out == 0 else psi
+        accelerations(t, state, track, vehicle, wheels, scratch, (step_dt, step_phi, step_psi))
         record(out, state, track, vehicle, scratch, outputs)
 
         for j in range(n_wheels):
@@ -383,6 +438,8 @@ def advance(
                 in_contact[j] = True
         if not abs(block_force[out]) < math.inf:
             return out
+        if step_dt > 0.0:
+            zhai_predict(state.u, state.ud, state.udd, state.udd_prev, dt, step_phi, step_psi)
     return RUNNING
 
 

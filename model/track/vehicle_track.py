@@ -163,8 +163,12 @@ def integrate(
     offset = track.wavenumber_unit * (wheels.x0 - wheels.x0[0])
     scratch = Scratch(
         modal_load=np.empty(n_modes),
-        wheel_offset=np.array([np.cos(offset), np.sin(offset)]),
-        wheel_work=np.empty((4, n_wheels)),
+        offset_cos=np.cos(offset),
+        offset_sin=np.sin(offset),
+        two_cos=np.empty(n_wheels),
+        wheel_first=np.empty(n_wheels),
+        wheel_prev=np.empty(n_wheels),
+        wheel_cur=np.empty(n_wheels),
         rail_at_wheel=np.empty(n_wheels),
         fold_disp=np.empty(n_block_modes),
         fold_vel=np.empty(n_block_modes),
@@ -174,26 +178,20 @@ def integrate(
         wheel_force=np.empty(n_wheels),
         monitored=np.empty(3),
     )
-    kernels.accelerations(0.0, state, track, vehicle, wheels, scratch)
-    kernels.record(0, state, track, vehicle, scratch, outputs)
-    in_contact = scratch.wheel_force > 0.0
-    contact = ContactLog(
-        in_contact=in_contact,
+    contact = ContactLog(  # a wheel off the rail at t = 0 opens an event there
+        in_contact=np.ones(n_wheels, dtype=bool),
         open_event=np.full(n_wheels, -1, dtype=np.int64),
         events=np.zeros((MAX_CONTACT_EVENTS, 4)),
         event_count=np.zeros(1, dtype=np.int64),
     )
-    for j in np.flatnonzero(~in_contact):  # already off the rail at t = 0
-        contact.events[contact.event_count[0]] = (j, 0.0, wheels.x0[j], -1.0)
-        contact.open_event[j] = contact.event_count[0]
-        contact.event_count[0] += 1
     diverged = None
-    chunk = max(1, math.ceil(n_steps / PROGRESS_CALLS))
-    for start in range(0, n_steps, chunk):
-        stop = min(start + chunk, n_steps)
+    chunk = max(1, math.ceil(nt / PROGRESS_CALLS))
+    for start in range(0, nt, chunk):
+        stop = min(start + chunk, nt)
         status = kernels.advance(
             start,
             stop,
+            n_steps,
             dt,
             ZHAI_PHI,
             ZHAI_PSI,
@@ -213,7 +211,7 @@ def integrate(
             diverged = stop  # a mode the outputs do not see has blown up
             break
         if progress is not None:
-            progress(stop / n_steps)
+            progress(stop / nt)
     n_events = int(contact.event_count[0])
     events = contact.events[: min(n_events, MAX_CONTACT_EVENTS)]
     still_open = events[:, 3] < 0.0
