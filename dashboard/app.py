@@ -200,5 +200,8 @@ def serve_session() -> Dashboard:
 
 
 if pn.state.served:
+    from dashboard.serve import use_light_resources
+
+    use_light_resources()  # no MathJax bundle unless a formula is shown
     pn.extension(notifications=False)
     serve_session()
