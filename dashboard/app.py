@@ -210,5 +210,8 @@ def serve_session() -> Dashboard:
 
 
 if pn.state.served:
+    from dashboard.serve import use_light_resources
+
+    use_light_resources()  # no MathJax bundle unless a formula is shown
     pn.extension("tabulator", notifications=False)  # the long-term tab's layer table
     serve_session()

@@ -1,20 +1,34 @@
-"""``tunnelsettle serve``: the dashboard served from the installed package.
+"""``tunnelsettle serve`` (also ``python -m dashboard.serve``): the dashboard served from the
+installed package, with a light first page.
 
 ``panel serve`` needs the path of the app's module; after a plain (not editable) install there is
 no ``dashboard/app.py`` under the working directory, so the path is that of the installed
-:mod:`dashboard.app`. The server replaces this process (it gets Ctrl-C and signals directly),
+:mod:`dashboard.app`. The server runs in this process (it gets Ctrl-C and signals directly),
 with ``--warm`` unless ``--no-warm``; options this command does not know are handed to
 ``panel serve`` unchanged (e.g. ``--allow-websocket-origin``)::
 
     tunnelsettle serve                      # http://localhost:5006/app
     tunnelsettle serve --port 5010 --address 0.0.0.0 --allow-websocket-origin host:5010
+
+Two changes to what the browser downloads, against plain ``panel serve``:
+
+- **compression on**: Tornado gzips every HTTP response (the page and the Bokeh/Panel bundles,
+  ~3 MB of JavaScript and CSS that compress about 4:1); Panel's CLI has no such option, so it is
+  passed to the server here;
+- **MathJax only for a formula**: Panel loads Bokeh's 1.8 MB MathJax bundle on any page that
+  holds an HTML or Markdown pane, formula or not. :func:`use_light_resources` makes it load the
+  bundle only when such a pane's text contains TeX delimiters (Bokeh's own test,
+  ``contains_tex_string``). The app calls it when served, so plain ``panel serve
+  dashboard/app.py`` drops the bundle too.
+
+Both act on private hooks of Panel 1.x (``panel.io.resources._panel_use_mathjax`` and
+``Serve.customize_kwargs``); ``benchmarks/bench_page_weight.py`` measures the result.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib.util
-import os
 import sys
 from pathlib import Path
 
@@ -31,8 +45,8 @@ def build_parser(prog: str = "tunnelsettle serve") -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=prog,
         description="Serve the interactive dashboard (panel serve of the installed "
-        "dashboard/app.py), then open the address it prints. Other options are passed to "
-        "panel serve.",
+        "dashboard/app.py, responses compressed), then open the address it prints. Other "
+        "options are passed to panel serve.",
     )
     parser.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port (default 5006)")
     parser.add_argument("--address", help="address to listen on (default: panel's, localhost only)")
@@ -47,8 +61,8 @@ def build_parser(prog: str = "tunnelsettle serve") -> argparse.ArgumentParser:
 
 
 def serve_command(args: argparse.Namespace, extra: list[str]) -> list[str]:
-    """The ``python -m panel serve ...`` command line of ``args`` and the passed-through options."""
-    command = [sys.executable, "-m", "panel", "serve", str(app_path()), "--port", str(args.port)]
+    """The ``panel serve ...`` command line of ``args`` and the passed-through options."""
+    command = ["panel", "serve", str(app_path()), "--port", str(args.port)]
     if args.address:
         command += ["--address", args.address]
     if args.warm:
@@ -58,8 +72,43 @@ def serve_command(args: argparse.Namespace, extra: list[str]) -> list[str]:
     return command + extra
 
 
+def _html_with_formula(roots) -> bool:
+    """True if a Panel HTML model in ``roots`` or below shows TeX (the only reason for MathJax)."""
+    from bokeh.embed.util import contains_tex_string
+    from panel.models.markup import HTML
+
+    return any(
+        isinstance(model, HTML) and isinstance(model.text, str) and contains_tex_string(model.text)
+        for root in roots
+        for model in root.references()
+    )
+
+
+def use_light_resources() -> None:
+    """Make Panel load the MathJax bundle only for a page that shows a formula (idempotent)."""
+    from panel.io import resources
+
+    resources._panel_use_mathjax = _html_with_formula
+
+
+def compress_responses() -> None:
+    """Make ``panel serve`` start its server with Tornado's response compression on."""
+    from panel.command.serve import Serve
+
+    customize = Serve.customize_kwargs
+    if getattr(customize, "compresses", False):
+        return
+
+    def compressed(self, args, server_kwargs):
+        """Panel's server options with Tornado's response compression on."""
+        return {**customize(self, args, server_kwargs), "compress_response": True}
+
+    compressed.compresses = True
+    Serve.customize_kwargs = compressed
+
+
 def main(argv: list[str] | None = None, prog: str = "tunnelsettle serve") -> int:
-    """Replace this process with the dashboard's server; returns only if it cannot start."""
+    """Run the dashboard's server in this process until it stops; returns its exit code."""
     args, extra = build_parser(prog).parse_known_args(argv)
     command = serve_command(args, extra)
     print(
@@ -69,5 +118,14 @@ def main(argv: list[str] | None = None, prog: str = "tunnelsettle serve") -> int
         "page says so; Ctrl-C stops the server)",
         flush=True,
     )
-    os.execv(command[0], command)
-    return 1  # pragma: no cover - execv does not return
+    from panel.command import main as panel_main
+
+    use_light_resources()
+    compress_responses()
+    sys.argv = command
+    panel_main()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(prog="python -m dashboard.serve"))

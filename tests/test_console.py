@@ -111,8 +111,8 @@ def test_serve_runs_panel_on_the_installed_app_with_warm_port_address_and_extras
         ["--port", "5010", "--address", "0.0.0.0", "--allow-websocket-origin", "h:5010"]
     )
     command = serve.serve_command(args, extra)
-    assert command[:5] == [sys.executable, "-m", "panel", "serve", str(app)]
-    assert command[5:] == [
+    assert command[:3] == ["panel", "serve", str(app)]
+    assert command[3:] == [
         "--port",
         "5010",
         "--address",

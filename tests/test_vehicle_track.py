@@ -220,14 +220,16 @@ def test_static_start_is_equilibrium_with_hertz_compression():
 
 
 def test_winkler_block_displacement_sums_every_wheel_of_the_train():
-    """The windowed sum (each wheel within WINKLER_REACH/β) equals the sum of every wheel's
-    deflection at every time to round-off (1e-14 of the peak)."""
+    """The windowed sum (each wheel within WINKLER_REACH/β, by the anchored geometric
+    recurrence) equals the sum of every wheel's deflection at every time to round-off: 1e-13 of
+    the peak (each is 3e-14 of the peak from the sum in extended precision: the positions near
+    160 m are rounded to 3e-14 m, which moves βξ by as much)."""
     scenario = Scenario.paper()
     t = np.linspace(0.0, scenario.passage_duration, 20_001)
     track = scenario.track
     dense = zimmermann_rail_deflection(scenario, t) * track.support_stiffness / track.pad_stiffness
     windowed = vt.winkler_block_displacement(scenario, t)
-    assert np.max(np.abs(windowed - dense)) < 1e-14 * dense.max()
+    assert np.max(np.abs(windowed - dense)) < 1e-13 * dense.max()
 
 
 def test_quasi_static_passage_matches_static_load_and_winkler_beam():

@@ -29,6 +29,8 @@ from model.track import irregularity
 # shortest wavelength λ_min if finer (interpolation error < 5e-4 of the amplitude at λ_min).
 PROFILE_GRID_STEP = 0.005
 PROFILE_POINTS_PER_WAVELENGTH = 100
+# DOFs a vehicle spring–dashpot acts on, at most: a bogie's bounce and pitch and a wheelset
+SPRING_ENDS = 3
 
 
 # ---- kernel records --------------------------------------------------------------------------
@@ -90,6 +92,12 @@ class VehicleSystem(NamedTuple):
     gravity_force: np.ndarray  # (n_cars, d) (N)
     wheel_dof: np.ndarray  # (n_cars, wheels per car), local DOF index of each wheelset
     body_dof: int  # local DOF index of the car-body bounce
+    # The spring–dashpots that K and C sum, Σ k a aᵀ: the local DOFs each acts on and the
+    # coefficients of its relative displacement aᵀu (0 in unused slots); the kernel uses these.
+    spring_dof: np.ndarray  # (n_springs, 3) local DOF indices
+    spring_lever: np.ndarray  # (n_springs, 3) coefficients a_i (1 or −1, or a lever arm in m)
+    spring_stiffness: np.ndarray  # (n_cars, n_springs) k (N/m)
+    spring_damping: np.ndarray  # (n_cars, n_springs) c (N·s/m)
 
 
 class WheelInputs(NamedTuple):
@@ -133,8 +141,13 @@ class SystemState(NamedTuple):
 class Scratch(NamedTuple):
     """Work arrays of one evaluation of the accelerations (allocated once per run)."""
 
-    sine_table: np.ndarray  # (N_m, n_wheels) Y_k(x_j)
-    wheel_work: np.ndarray  # (3, n_wheels) Chebyshev recurrence
+    modal_load: np.ndarray  # (N_m,) Σ_j p_j Y_k(x_j)
+    offset_cos: np.ndarray  # (n_wheels,) cos Δ_j, Δ_j = π(x0_j − x0_0)/L
+    offset_sin: np.ndarray  # (n_wheels,) sin Δ_j
+    two_cos: np.ndarray  # (n_wheels,) 2cos θ_j, the Chebyshev recurrence's factor
+    wheel_first: np.ndarray  # (n_wheels,) its first term
+    wheel_prev: np.ndarray  # (n_wheels,) and its two running terms
+    wheel_cur: np.ndarray  # (n_wheels,)
     rail_at_wheel: np.ndarray  # (n_wheels,) Z_r(x_j)
     fold_disp: np.ndarray  # (N−1,) rail displacement folded onto block modes
     fold_vel: np.ndarray  # (N−1,)
@@ -142,6 +155,7 @@ class Scratch(NamedTuple):
     wheel_x: np.ndarray  # (n_wheels,) wheel positions (m)
     compression: np.ndarray  # (n_wheels,) δ (m)
     wheel_force: np.ndarray  # (n_wheels,) wheel–rail forces (N)
+    monitored: np.ndarray  # (3,) rail and block displacement at the monitored block, block velocity
 
 
 class Outputs(NamedTuple):
@@ -271,6 +285,7 @@ def assemble_vehicle(scenario: Scenario) -> VehicleSystem:
     n_dof = len(masses)
     stiffness = np.zeros((n_dof, n_dof))
     damping = np.zeros((n_dof, n_dof))
+    springs = []  # (dofs, coefficients, k, c)
 
     def spring(k, c, coefficients):
         """Add a spring–dashpot acting on the relative displacement Σ a_i u_i."""
@@ -279,6 +294,8 @@ def assemble_vehicle(scenario: Scenario) -> VehicleSystem:
             a[dof] = coefficient
         stiffness[:] += k * np.outer(a, a)
         damping[:] += c * np.outer(a, a)
+        ends = list(coefficients.items()) + [(0, 0.0)] * (SPRING_ENDS - len(coefficients))
+        springs.append(([dof for dof, _ in ends], [lever for _, lever in ends], k, c))
 
     for b, (bounce, pitch) in enumerate(bogies):
         spring(veh.secondary_stiffness, veh.secondary_damping, {**body_point[b], bounce: -1.0})
@@ -298,6 +315,10 @@ def assemble_vehicle(scenario: Scenario) -> VehicleSystem:
         gravity_force=np.tile(gravity, (n_cars, 1)),
         wheel_dof=np.tile(np.array(wheels, dtype=np.int64), (n_cars, 1)),
         body_dof=0,
+        spring_dof=np.array([dofs for dofs, _, _, _ in springs], dtype=np.int64),
+        spring_lever=np.array([levers for _, levers, _, _ in springs], dtype=float),
+        spring_stiffness=np.tile([float(k) for _, _, k, _ in springs], (n_cars, 1)),
+        spring_damping=np.tile([float(c) for _, _, _, c in springs], (n_cars, 1)),
     )
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
+import scipy.fft
 
 from model.params import FRA_ROUGHNESS_CM2_RAD_PER_M, Irregularity
 
@@ -21,9 +22,6 @@ FRA_SCALE_FACTOR = 0.25  # k of the FRA formula (docs/model.md §4)
 FRA_CUTOFF_WAVENUMBER = 0.8245  # Ω_c (rad/m)
 CM2_TO_M2 = 1e-4
 
-# Phasors are recomputed exactly every this many grid points so rounding in the rotation
-# recurrence (growing ~ eps per step) stays below ~1e-13 of the amplitude.
-_REANCHOR_POINTS = 1024
 # A grid counts as uniform when every point is within this fraction of the step of the ideal
 # grid; the profile's slope is O(1e-3), so the resulting error is below 1e-9 · step.
 _UNIFORM_GRID_TOLERANCE = 1e-6
@@ -122,32 +120,27 @@ def series_wavenumbers(wavelength_band_m: tuple[float, float], n_components: int
     return omega_min + (np.arange(n_components) + 0.5) * spacing, spacing
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _series_on_uniform_grid(
-    x_start, x_step, n_points, amplitudes, wavenumbers, phases, reanchor_points
-):
-    """Σ_k a_k cos(Ω_k x + φ_k) at x = x_start + j·x_step by phasor rotation along the grid."""
+def _series_on_uniform_grid(x_start, x_step, n_points, amplitudes, wavenumbers, phases):
+    """Σ_k a_k cos(Ω_k x + φ_k) at x_j = x_start + j·h, Ω_k = Ω_0 + kΔΩ, by the chirp-z transform.
+
+    With d_k = a_k exp(i(Ω_k x_start + φ_k)) and w = exp(iΔΩh) the sum is
+    Re[exp(iΩ_0 jh) Σ_k d_k w^{kj}]; Bluestein's kj = (k² + j² − (j − k)²)/2 turns Σ_k into a
+    convolution, evaluated by FFT in O((n + K) log(n + K)) instead of n·K rotations. The chirp
+    phases (ΔΩh/2)m² are rounded to ~1e-16 of themselves (≤ 1e-12 rad on 10⁵ points); the
+    tests compare against direct cosines to 1e-12 m.
+    """
     n_comp = amplitudes.size
-    out = np.empty(n_points)
-    real = np.empty(n_comp)
-    imag = np.empty(n_comp)
-    step_real = np.cos(wavenumbers * x_step)
-    step_imag = np.sin(wavenumbers * x_step)
-    for block_start in range(0, n_points, reanchor_points):
-        x = x_start + block_start * x_step
-        for k in range(n_comp):
-            angle = wavenumbers[k] * x + phases[k]
-            real[k] = amplitudes[k] * math.cos(angle)
-            imag[k] = amplitudes[k] * math.sin(angle)
-        for j in range(block_start, min(block_start + reanchor_points, n_points)):
-            total = 0.0
-            for k in range(n_comp):
-                total += real[k]
-                rotated = real[k] * step_real[k] - imag[k] * step_imag[k]
-                imag[k] = real[k] * step_imag[k] + imag[k] * step_real[k]
-                real[k] = rotated
-            out[j] = total
-    return out
+    spacing = (wavenumbers[-1] - wavenumbers[0]) / (n_comp - 1) if n_comp > 1 else 0.0
+    half_chirp = 0.5 * spacing * x_step
+    k = np.arange(n_comp, dtype=float)
+    j = np.arange(n_points, dtype=float)
+    weighted = amplitudes * np.exp(1j * (wavenumbers * x_start + phases + half_chirp * k * k))
+    lags = np.arange(-(n_comp - 1), n_points, dtype=float)
+    size = scipy.fft.next_fast_len(n_comp + n_points - 1)
+    convolved = scipy.fft.ifft(
+        scipy.fft.fft(weighted, size) * scipy.fft.fft(np.exp(-1j * half_chirp * lags * lags), size)
+    )[n_comp - 1 : n_comp - 1 + n_points]
+    return (np.exp(1j * (wavenumbers[0] * x_step * j + half_chirp * j * j)) * convolved).real
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
@@ -224,9 +217,7 @@ def synthesize_profile(
     step = _uniform_step(x)
     if step is None:
         return _series_at_points(x, amplitudes, wavenumbers, phases)
-    return _series_on_uniform_grid(
-        x[0], step, x.size, amplitudes, wavenumbers, phases, _REANCHOR_POINTS
-    )
+    return _series_on_uniform_grid(x[0], step, x.size, amplitudes, wavenumbers, phases)
 
 
 def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 # Status codes returned by ``advance``
 RUNNING = -1
@@ -30,12 +31,20 @@ FAST = {"reassoc", "contract", "nsz", "arcp"}
 
 
 @numba.njit(cache=True)
+def zhai_update(x, v, a, a_prev, dt, phi, psi):
+    """Zhai's explicit step of one variable: (x_{n+1}, v_{n+1}) from x_n, v_n, a_n, a_{n−1}."""
+    h2 = dt * dt
+    return (
+        x + (v * dt + (0.5 + psi) * a * h2 - psi * a_prev * h2),
+        v + ((1.0 + phi) * a * dt - phi * a_prev * dt),
+    )
+
+
+@numba.njit(cache=True)
 def zhai_predict(x, v, a, a_prev, dt, phi, psi):
     """Zhai's explicit update of x, v in place; a_prev takes a_n (a is then recomputed)."""
-    h2 = dt * dt
     for i in range(x.size):
-        x[i] += v[i] * dt + (0.5 + psi) * a[i] * h2 - psi * a_prev[i] * h2
-        v[i] += (1.0 + phi) * a[i] * dt - phi * a_prev[i] * dt
+        x[i], v[i] = zhai_update(x[i], v[i], a[i], a_prev[i], dt, phi, psi)
         a_prev[i] = a[i]
 
 
@@ -64,89 +73,256 @@ def profile_at(eta_grid, grid_start, grid_step, x):
 
 @numba.njit(cache=True, fastmath=FAST)
 def vehicle_accelerations(u, ud, udd, vehicle, wheel_force):
-    """Vehicle: M ü = f_g − K u − C u̇ − (contact forces on the wheelsets), car by car."""
-    inv_mass, stiffness, damping = vehicle.inv_mass, vehicle.stiffness, vehicle.damping
-    gravity_force, wheel_dof = vehicle.gravity_force, vehicle.wheel_dof
+    """Vehicle: M ü = f_g − Σ (k aᵀu + c aᵀu̇) a − (contact forces on the wheelsets), per car.
+
+    Summed over the spring–dashpots (each on a relative displacement aᵀu of at most three
+    DOFs), which is K u + C u̇ with ~40 % of the dense matrices' multiply–adds.
+    """
+    inv_mass, gravity_force, wheel_dof = vehicle.inv_mass, vehicle.gravity_force, vehicle.wheel_dof
+    spring_dof, spring_lever = vehicle.spring_dof, vehicle.spring_lever
+    spring_k, spring_c = vehicle.spring_stiffness, vehicle.spring_damping
     n_cars, n_dof = inv_mass.shape
+    n_springs, n_ends = spring_dof.shape
     wheels_per_car = wheel_dof.shape[1]
     for car in range(n_cars):
         base = car * n_dof
         for i in range(n_dof):
-            force = gravity_force[car, i]
-            for m in range(n_dof):
-                force -= stiffness[car, i, m] * u[base + m] + damping[car, i, m] * ud[base + m]
-            udd[base + i] = force
+            udd[base + i] = gravity_force[car, i]
         for w in range(wheels_per_car):
             udd[base + wheel_dof[car, w]] -= wheel_force[car * wheels_per_car + w]
+        for spring in range(n_springs):
+            stretch = 0.0
+            rate = 0.0
+            for end in range(n_ends):
+                dof = base + spring_dof[spring, end]
+                stretch += spring_lever[spring, end] * u[dof]
+                rate += spring_lever[spring, end] * ud[dof]
+            force = spring_k[car, spring] * stretch + spring_c[car, spring] * rate
+            for end in range(n_ends):
+                udd[base + spring_dof[spring, end]] -= force * spring_lever[spring, end]
         for i in range(n_dof):
             udd[base + i] *= inv_mass[car, i]
 
 
+# Modes per pass of the wheel loops below: eight keep the recurrence's terms in registers and
+# halve the loop overhead per mode against four (measured, benchmarks/bench_vehicle_track.py).
+MODES_PER_PASS = 8
+
+
 @numba.njit(cache=True, fastmath=FAST)
-def accelerations(t, state, track, vehicle, wheels, scratch):
-    """Accelerations qdd, sdd, udd of the whole system at time t; wheel forces in ``scratch``.
+def sine_series_at_wheels(coefficients, two_cos, first, prev, cur, total):
+    """total_j = Σ_k c_k first_j sin(kθ_j)/sin θ_j, k = 1..N_m, by the Chebyshev recurrence.
+
+    sin((k+1)θ) = 2cosθ sin kθ − sin((k−1)θ), started from ``first`` (the k = 1 term without
+    its coefficient, e.g. A sin θ_j, which makes the terms the mode shapes Y_k(x_j)). The inner
+    loops run over the wheels, so they vectorise, ``MODES_PER_PASS`` modes per pass; ``prev``
+    and ``cur`` are work arrays. The rounding error grows like k ε/sin θ (~1e-13 here: the
+    wheels stay ≥ 20 m from the rail ends).
+    """
+    n_modes, n_wheels = coefficients.size, two_cos.size
+    for j in range(n_wheels):
+        prev[j] = 0.0
+        cur[j] = first[j]
+        total[j] = 0.0
+    k = 0
+    while k + MODES_PER_PASS <= n_modes:
+        c0, c1, c2, c3 = (
+            coefficients[k],
+            coefficients[k + 1],
+            coefficients[k + 2],
+            coefficients[k + 3],
+        )
+        c4, c5 = coefficients[k + 4], coefficients[k + 5]
+        c6, c7 = coefficients[k + 6], coefficients[k + 7]
+        for j in range(n_wheels):
+            c = two_cos[j]
+            y0 = cur[j]
+            y1 = c * y0 - prev[j]
+            y2 = c * y1 - y0
+            y3 = c * y2 - y1
+            y4 = c * y3 - y2
+            y5 = c * y4 - y3
+            y6 = c * y5 - y4
+            y7 = c * y6 - y5
+            total[j] += (y0 * c0 + y1 * c1 + y2 * c2 + y3 * c3) + (
+                y4 * c4 + y5 * c5 + y6 * c6 + y7 * c7
+            )
+            prev[j] = y7
+            cur[j] = c * y7 - y6
+        k += MODES_PER_PASS
+    for last in range(k, n_modes):  # the last N_m mod MODES_PER_PASS modes
+        ck = coefficients[last]
+        for j in range(n_wheels):
+            y = cur[j]
+            total[j] += y * ck
+            cur[j] = two_cos[j] * y - prev[j]
+            prev[j] = y
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def modal_loads(two_cos, first, prev, cur, load):
+    """load_k = Σ_j first_j sin(kθ_j)/sin θ_j for k = 1..N_m, by the same recurrence.
+
+    With first_j = p_j A sin θ_j this is the modal wheel load Σ_j p_j Y_k(x_j). The sines are
+    generated again rather than stored by the first pass: a table of N_m × n_wheels values is
+    larger than the level-1 cache, and writing and reading it cost more than the recurrence.
+    """
+    n_modes, n_wheels = load.size, two_cos.size
+    for j in range(n_wheels):
+        prev[j] = 0.0
+        cur[j] = first[j]
+    k = 0
+    while k + MODES_PER_PASS <= n_modes:
+        a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+        for j in range(n_wheels):
+            c = two_cos[j]
+            y0 = cur[j]
+            y1 = c * y0 - prev[j]
+            y2 = c * y1 - y0
+            y3 = c * y2 - y1
+            y4 = c * y3 - y2
+            y5 = c * y4 - y3
+            y6 = c * y5 - y4
+            y7 = c * y6 - y5
+            a0 += y0
+            a1 += y1
+            a2 += y2
+            a3 += y3
+            a4 += y4
+            a5 += y5
+            a6 += y6
+            a7 += y7
+            prev[j] = y7
+            cur[j] = c * y7 - y6
+        load[k] = a0
+        load[k + 1] = a1
+        load[k + 2] = a2
+        load[k + 3] = a3
+        load[k + 4] = a4
+        load[k + 5] = a5
+        load[k + 6] = a6
+        load[k + 7] = a7
+        k += MODES_PER_PASS
+    for last in range(k, n_modes):  # the last N_m mod MODES_PER_PASS modes
+        a = 0.0
+        for j in range(n_wheels):
+            y = cur[j]
+            a += y
+            cur[j] = two_cos[j] * y - prev[j]
+            prev[j] = y
+        load[last] = a
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def paired_modes(track, state, modal_load, rail_disp, rail_vel, block_force, sums, step):
+    """Rail mode r and block mode r, r < min(N_m, N − 1) (ρ = r, σ = +1): accelerations,
+    fastener forces, monitored sums, and Zhai's predictor over ``step`` = (Δt, φ, ψ) if Δt > 0.
+
+    ``rail_disp``, ``rail_vel``: the rail's displacement and velocity folded onto each block
+    mode (q, q̇ themselves when N_m ≤ N − 1). The accelerations a_n replace a_{n−1} in qdd and
+    sdd, which move to qdd_prev and sdd_prev when the state is advanced.
+    """
+    q, qd, qdd, qdd_prev = state.q, state.qd, state.qdd, state.qdd_prev
+    s, sd, sdd, sdd_prev = state.s, state.sd, state.sdd, state.sdd_prev
+    omega2, gain = track.omega2, track.block_gain
+    fastener_k, fastener_c = track.fastener_k, track.fastener_c
+    pad_k, pad_c = track.pad_k, track.pad_c
+    inv_block_mass = 1.0 / track.block_mass
+    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
+    dt, phi, psi = step
+    z_rail = 0.0
+    z_block = 0.0
+    v_block = 0.0
+    for r in range(min(q.size, s.size)):
+        force = fastener_k * (gain * rail_disp[r] - s[r]) + fastener_c * (
+            gain * rail_vel[r] - sd[r]
+        )
+        block_force[r] = force
+        rail_acc = modal_load[r] - omega2[r] * q[r] - gain * force
+        block_acc = (force - pad_k * s[r] - pad_c * sd[r]) * inv_block_mass
+        z_rail += rail_weight[r] * q[r]
+        z_block += block_weight[r] * s[r]
+        v_block += block_weight[r] * sd[r]
+        if dt > 0.0:
+            q[r], qd[r] = zhai_update(q[r], qd[r], rail_acc, qdd[r], dt, phi, psi)
+            s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
+            qdd_prev[r] = qdd[r]
+            sdd_prev[r] = sdd[r]
+        qdd[r] = rail_acc
+        sdd[r] = block_acc
+    sums[0] += z_rail
+    sums[1] += z_block
+    sums[2] += v_block
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def unpaired_modes(track, state, modal_load, block_force, sums, step):
+    """The modes :func:`paired_modes` leaves: block modes r ≥ N_m (N_m < N − 1), which no rail
+    mode meets, and rail modes k ≥ N − 1, folded onto block mode ρ_k with sign σ_k."""
+    q, qd, qdd, qdd_prev = state.q, state.qd, state.qdd, state.qdd_prev
+    s, sd, sdd, sdd_prev = state.s, state.sd, state.sdd, state.sdd_prev
+    fold_index, fold_sign = track.fold_index, track.fold_sign
+    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
+    dt, phi, psi = step
+    n_paired = min(q.size, s.size)
+    for r in range(n_paired, s.size):
+        block_acc = (
+            -(track.fastener_k + track.pad_k) * s[r] - (track.fastener_c + track.pad_c) * sd[r]
+        ) / track.block_mass
+        sums[1] += block_weight[r] * s[r]
+        sums[2] += block_weight[r] * sd[r]
+        if dt > 0.0:
+            s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
+            sdd_prev[r] = sdd[r]
+        sdd[r] = block_acc
+    for k in range(n_paired, q.size):
+        rail_acc = modal_load[k] - track.omega2[k] * q[k]
+        if fold_index[k] >= 0:
+            rail_acc -= fold_sign[k] * track.block_gain * block_force[fold_index[k]]
+        sums[0] += rail_weight[k] * q[k]
+        if dt > 0.0:
+            q[k], qd[k] = zhai_update(q[k], qd[k], rail_acc, qdd[k], dt, phi, psi)
+            qdd_prev[k] = qdd[k]
+        qdd[k] = rail_acc
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def accelerations(t, state, track, vehicle, wheels, scratch, step):
+    """Accelerations of the whole system at time t, then the track's predictor step.
+
+    Sets qdd, sdd, udd (the previous ones move to qdd_prev, sdd_prev when the state is
+    advanced), the wheel forces and compressions in ``scratch`` and the monitored rail and
+    block displacements and block velocity in ``scratch.monitored``. With ``step`` =
+    (Δt, φ, ψ), Δt > 0, Zhai's predictor then takes the rail and block modal coordinates to
+    t + Δt in the same pass over the modes (the vehicle's is :func:`zhai_predict`).
 
     ``wheels.prescribed_load`` (n_wheels,) replaces the Hertz law when its first entry is ≥ 0:
     the moving-constant-load model, with the vehicle at rest (ü = 0, δ reported as 0). It is
     [-1.0] for the coupled vehicle.
     """
-    q, qd, qdd = state.q, state.qd, state.qdd
-    s, sd, sdd = state.s, state.sd, state.sdd
+    q, qd = state.q, state.qd
     u, ud, udd = state.u, state.ud, state.udd
-    omega2, fold_index, fold_sign = track.omega2, track.fold_index, track.fold_sign
-    block_gain, mode_amplitude = track.block_gain, track.mode_amplitude
-    wavenumber_unit = track.wavenumber_unit
-    fastener_k, fastener_c = track.fastener_k, track.fastener_c
-    pad_k, pad_c, block_mass = track.pad_k, track.pad_c, track.block_mass
     wheel_x0, speed, prescribed_load = wheels.x0, wheels.speed, wheels.prescribed_load
-    sine_table, rail_at_wheel = scratch.sine_table, scratch.rail_at_wheel
-    fold_disp, fold_vel = scratch.fold_disp, scratch.fold_vel
-    block_mode_force, wheel_x = scratch.block_mode_force, scratch.wheel_x
-    compression, wheel_force = scratch.compression, scratch.wheel_force
-    n_modes = q.size
+    rail_at_wheel, modal_load = scratch.rail_at_wheel, scratch.modal_load
+    wheel_x, compression, wheel_force = scratch.wheel_x, scratch.compression, scratch.wheel_force
+    two_cos, first = scratch.two_cos, scratch.wheel_first
+    prev, cur = scratch.wheel_prev, scratch.wheel_cur
+    offset_cos, offset_sin = scratch.offset_cos, scratch.offset_sin
     n_wheels = wheel_x0.size
     n_dof = vehicle.inv_mass.shape[1]
     wheel_dof = vehicle.wheel_dof
     wheels_per_car = wheel_dof.shape[1]
 
-    # Mode shapes at the wheels, Y_k(x_j) = A sin(kθ_j), by the Chebyshev recurrence
-    # sin((k+1)θ) = 2cosθ sin kθ − sin((k−1)θ); inner loops run over wheels so they vectorise.
-    two_cos = scratch.wheel_work[0]
-    s_prev = scratch.wheel_work[1]
-    s_cur = scratch.wheel_work[2]
+    # Rail under the wheels, Z_r(x_j) = Σ_k q_k Y_k(x_j), Y_k(x) = A sin(kθ), θ = πx/L. Every
+    # wheel moves at the same speed, so θ_j = θ_0 + Δ_j with fixed offsets Δ_j: two
+    # trigonometric calls per step, cos and sin of θ_j by the addition formula.
+    theta = track.wavenumber_unit * (wheel_x0[0] + speed * t)
+    cos_lead, sin_lead = math.cos(theta), math.sin(theta)
     for j in range(n_wheels):
-        x = wheel_x0[j] + speed * t
-        wheel_x[j] = x
-        theta = wavenumber_unit * x
-        two_cos[j] = 2.0 * math.cos(theta)
-        s_prev[j] = 0.0
-        s_cur[j] = mode_amplitude * math.sin(theta)
-        rail_at_wheel[j] = 0.0
-    k = 0
-    while k + 4 <= n_modes:  # four modes per pass: a quarter of the loads and stores
-        q0, q1, q2, q3 = q[k], q[k + 1], q[k + 2], q[k + 3]
-        for j in range(n_wheels):
-            c = two_cos[j]
-            y0 = s_cur[j]
-            y1 = c * y0 - s_prev[j]
-            y2 = c * y1 - y0
-            y3 = c * y2 - y1
-            sine_table[k, j] = y0
-            sine_table[k + 1, j] = y1
-            sine_table[k + 2, j] = y2
-            sine_table[k + 3, j] = y3
-            rail_at_wheel[j] += y0 * q0 + y1 * q1 + y2 * q2 + y3 * q3
-            s_prev[j] = y3
-            s_cur[j] = c * y3 - y2
-        k += 4
-    for k in range(4 * (n_modes // 4), n_modes):
-        qk = q[k]
-        for j in range(n_wheels):
-            shape = s_cur[j]
-            sine_table[k, j] = shape
-            rail_at_wheel[j] += shape * qk
-            s_cur[j] = two_cos[j] * shape - s_prev[j]
-            s_prev[j] = shape
+        wheel_x[j] = wheel_x0[j] + speed * t
+        two_cos[j] = 2.0 * (cos_lead * offset_cos[j] - sin_lead * offset_sin[j])
+        first[j] = track.mode_amplitude * (sin_lead * offset_cos[j] + cos_lead * offset_sin[j])
+    sine_series_at_wheels(q, two_cos, first, prev, cur, rail_at_wheel)
 
     if prescribed_load[0] >= 0.0:  # moving constant loads, no vehicle
         for j in range(n_wheels):
@@ -164,41 +340,38 @@ def accelerations(t, state, track, vehicle, wheels, scratch):
             wheel_force[j] = hertz_force(compression[j], wheels.hertz_constant)
         vehicle_accelerations(u, ud, udd, vehicle, wheel_force)
 
-    # Track: rail modes k < N meet block mode k directly (ρ = k, σ = +1); higher modes fold
-    n_block_modes = s.size
-    n_direct = min(n_modes, n_block_modes)
-    for r in range(n_direct):
-        fold_disp[r] = q[r]
-        fold_vel[r] = qd[r]
-    for r in range(n_direct, n_block_modes):
-        fold_disp[r] = 0.0
-        fold_vel[r] = 0.0
-    for k in range(n_direct, n_modes):
-        r = fold_index[k]
-        if r >= 0:
-            fold_disp[r] += fold_sign[k] * q[k]
-            fold_vel[r] += fold_sign[k] * qd[k]
-    for r in range(n_block_modes):
-        force = fastener_k * (block_gain * fold_disp[r] - s[r]) + fastener_c * (
-            block_gain * fold_vel[r] - sd[r]
+    # Modal wheel loads Σ_j p_j Y_k(x_j)
+    for j in range(n_wheels):
+        first[j] *= wheel_force[j]
+    modal_loads(two_cos, first, prev, cur, modal_load)
+
+    # Track: rail mode k < N meets block mode k alone; modes k ≥ N fold onto the block modes
+    # (none with the default N_m = N), through fold_disp and fold_vel.
+    monitored = scratch.monitored
+    monitored[:] = 0.0
+    if q.size > state.s.size:
+        fold_disp, fold_vel = scratch.fold_disp, scratch.fold_vel
+        fold_index, fold_sign = track.fold_index, track.fold_sign
+        for r in range(fold_disp.size):
+            fold_disp[r] = q[r]
+            fold_vel[r] = qd[r]
+        for k in range(fold_disp.size, q.size):
+            if fold_index[k] >= 0:
+                fold_disp[fold_index[k]] += fold_sign[k] * q[k]
+                fold_vel[fold_index[k]] += fold_sign[k] * qd[k]
+        paired_modes(
+            track, state, modal_load, fold_disp, fold_vel, scratch.block_mode_force, monitored, step
         )
-        block_mode_force[r] = force
-        sdd[r] = (force - pad_k * s[r] - pad_c * sd[r]) / block_mass
-    for k in range(n_modes):
-        acc = -omega2[k] * q[k]
-        for j in range(n_wheels):
-            acc += wheel_force[j] * sine_table[k, j]
-        if k < n_direct:
-            acc -= block_gain * block_mode_force[k]
-        elif fold_index[k] >= 0:
-            acc -= fold_sign[k] * block_gain * block_mode_force[fold_index[k]]
-        qdd[k] = acc
+    else:
+        paired_modes(track, state, modal_load, q, qd, scratch.block_mode_force, monitored, step)
+    unpaired_modes(track, state, modal_load, scratch.block_mode_force, monitored, step)
 
 
 @numba.njit(cache=True, nogil=True)  # releases the GIL: a served dashboard stays responsive
 def advance(
-    step_start,
-    step_stop,
+    out_start,
+    out_stop,
+    n_steps,
     dt,
     phi,
     psi,
@@ -211,18 +384,19 @@ def advance(
     outputs,
     contact,
 ):
-    """Advance the system from step ``step_start`` to ``step_stop`` with Zhai's method.
+    """Outputs ``out_start`` … ``out_stop`` − 1 of a run of ``n_steps`` steps of Zhai's method.
 
-    Step n takes the state at t_n = n·dt to t_{n+1} and writes outputs at index n + 1 (index 0
-    holds the initial state). φ = ψ = 0 on step 0. Loss of contact is logged in
-    ``contact.events`` (rows: wheel, t_start, x_start, t_end) while ``contact.event_count[0]``
-    counts all of them.
+    At output n the accelerations at t_n = n·dt are evaluated and recorded, then (n < n_steps)
+    Zhai's predictor takes the state to t_{n+1}, with φ = ψ = 0 from n = 0; output 0 is the
+    initial state. Loss of contact is logged in ``contact.events`` (rows: wheel, t_start,
+    x_start, t_end; ``contact.in_contact`` starts True, so a wheel off the rail at t = 0 opens
+    an event at 0) while ``contact.event_count[0]`` counts all of them.
 
     Returns
     -------
     int
-        ``RUNNING`` (−1) if all steps were taken, else the index of the first output at which
-        the response diverged (non-finite, or a wheel–rail compression beyond
+        ``RUNNING`` (−1) if all outputs were computed, else the index of the first output at
+        which the response diverged (non-finite, or a wheel–rail compression beyond
         ``divergence_limit`` m; a gap of any size is a wheel in flight, not divergence);
         outputs from that index on are not valid.
     """
@@ -233,15 +407,12 @@ def advance(
     event_capacity = events.shape[0]
     block_force = outputs.block_force
 
-    for step in range(step_start, step_stop):
-        step_phi = 0.0 if step == 0 else phi
-        step_psi = 0.0 if step == 0 else psi
-        zhai_predict(state.q, state.qd, state.qdd, state.qdd_prev, dt, step_phi, step_psi)
-        zhai_predict(state.s, state.sd, state.sdd, state.sdd_prev, dt, step_phi, step_psi)
-        zhai_predict(state.u, state.ud, state.udd, state.udd_prev, dt, step_phi, step_psi)
-        out = step + 1
+    for out in range(out_start, out_stop):
         t = out * dt
-        accelerations(t, state, track, vehicle, wheels, scratch)
+        step_dt = dt if out < n_steps else 0.0
+        step_phi = 0.0 if out == 0 else phi
+        step_psi = 0.0 if out == 0 else psi
+        accelerations(t, state, track, vehicle, wheels, scratch, (step_dt, step_phi, step_psi))
         record(out, state, track, vehicle, scratch, outputs)
 
         for j in range(n_wheels):
@@ -267,25 +438,18 @@ def advance(
                 in_contact[j] = True
         if not abs(block_force[out]) < math.inf:
             return out
+        if step_dt > 0.0:
+            zhai_predict(state.u, state.ud, state.udd, state.udd_prev, dt, step_phi, step_psi)
     return RUNNING
 
 
 @numba.njit(cache=True, fastmath=FAST)
 def record(out, state, track, vehicle, scratch, outputs):
-    """Write the monitored quantities of the current state at output index ``out``."""
-    q, s, sd, udd = state.q, state.s, state.sd, state.udd
-    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
-    z_block = 0.0
-    v_block = 0.0
-    for r in range(s.size):
-        z_block += block_weight[r] * s[r]
-        v_block += block_weight[r] * sd[r]
-    z_rail = 0.0
-    for k in range(q.size):
-        z_rail += rail_weight[k] * q[k]
-    outputs.block_disp[out] = z_block
-    outputs.block_force[out] = track.pad_k * z_block + track.pad_c * v_block
-    outputs.rail_disp[out] = z_rail
+    """Write the monitored quantities at output index ``out`` (after :func:`accelerations`)."""
+    udd, monitored = state.udd, scratch.monitored
+    outputs.rail_disp[out] = monitored[0]
+    outputs.block_disp[out] = monitored[1]
+    outputs.block_force[out] = track.pad_k * monitored[1] + track.pad_c * monitored[2]
     n_dof = vehicle.inv_mass.shape[1]
     wheel_dof = vehicle.wheel_dof
     wheels_per_car = wheel_dof.shape[1]
@@ -297,3 +461,39 @@ def record(out, state, track, vehicle, scratch, outputs):
     body_acc = outputs.body_acc
     for car in range(body_acc.shape[0]):
         body_acc[car, out] = udd[car * n_dof + vehicle.body_dof]
+
+
+# winkler_shape_sum: samples between exact evaluations of e^{−ξ}(cos ξ + sin ξ); in between a
+# complex multiplication per sample, whose rounding (~1e-16 each) stays below 1e-14 of the peak.
+WINKLER_ANCHOR_SAMPLES = 32
+
+
+@numba.njit(cache=True)
+def winkler_shape_sum(t_start, t_step, n_samples, pass_times, decay_rate, reach):
+    """Σ_j e^{−ξ_j}(cos ξ_j + sin ξ_j), ξ_j = decay_rate·|t − t_j|, at t = t_start + n·t_step.
+
+    Each pass time t_j contributes where ξ_j < ``reach``. On either side of t_j the samples of
+    e^{(−1+i)ξ} form a geometric sequence (ratio e^{(−1+i)·decay_rate·t_step}), whose real plus
+    imaginary part is the term; it is evaluated exactly every ``WINKLER_ANCHOR_SAMPLES``.
+    """
+    out = np.zeros(n_samples)
+    a = decay_rate * t_step
+    ratio = complex(math.exp(-a) * math.cos(a), math.exp(-a) * math.sin(a))
+    for t_pass in pass_times:
+        centre = (t_pass - t_start) / t_step
+        for direction in (1, -1):
+            n = math.ceil(centre) if direction > 0 else math.ceil(centre) - 1
+            count = 0
+            term = 0j
+            while 0 <= n < n_samples:
+                xi = a * abs(n - centre)
+                if xi >= reach:
+                    break
+                if count % WINKLER_ANCHOR_SAMPLES == 0:
+                    decay = math.exp(-xi)
+                    term = complex(decay * math.cos(xi), decay * math.sin(xi))
+                out[n] += term.real + term.imag
+                term *= ratio
+                count += 1
+                n += direction
+    return out

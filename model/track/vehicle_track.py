@@ -149,17 +149,26 @@ def integrate(
     n_wheels = wheels.x0.size
     n_modes, n_block_modes = track.omega2.size, track.n_spacings - 1
     nt = n_steps + 1
+    # The histories of many channels are stored time-major (the transposed views keep the
+    # (channel, time) shape): a step writes one contiguous row, not one value per channel
+    # rows a megabyte apart, each on its own memory page.
     outputs = Outputs(
         block_force=np.zeros(nt),
         block_disp=np.zeros(nt),
         rail_disp=np.zeros(nt),
-        wheel_force=np.zeros((n_wheels, nt)),
-        wheel_acc=np.zeros((n_wheels, nt)),
-        body_acc=np.zeros((vehicle.inv_mass.shape[0], nt)),
+        wheel_force=np.zeros((nt, n_wheels)).T,
+        wheel_acc=np.zeros((nt, n_wheels)).T,
+        body_acc=np.zeros((nt, vehicle.inv_mass.shape[0])).T,
     )
+    offset = track.wavenumber_unit * (wheels.x0 - wheels.x0[0])
     scratch = Scratch(
-        sine_table=np.empty((n_modes, n_wheels)),
-        wheel_work=np.empty((3, n_wheels)),
+        modal_load=np.empty(n_modes),
+        offset_cos=np.cos(offset),
+        offset_sin=np.sin(offset),
+        two_cos=np.empty(n_wheels),
+        wheel_first=np.empty(n_wheels),
+        wheel_prev=np.empty(n_wheels),
+        wheel_cur=np.empty(n_wheels),
         rail_at_wheel=np.empty(n_wheels),
         fold_disp=np.empty(n_block_modes),
         fold_vel=np.empty(n_block_modes),
@@ -167,27 +176,22 @@ def integrate(
         wheel_x=np.empty(n_wheels),
         compression=np.empty(n_wheels),
         wheel_force=np.empty(n_wheels),
+        monitored=np.empty(3),
     )
-    kernels.accelerations(0.0, state, track, vehicle, wheels, scratch)
-    kernels.record(0, state, track, vehicle, scratch, outputs)
-    in_contact = scratch.wheel_force > 0.0
-    contact = ContactLog(
-        in_contact=in_contact,
+    contact = ContactLog(  # a wheel off the rail at t = 0 opens an event there
+        in_contact=np.ones(n_wheels, dtype=bool),
         open_event=np.full(n_wheels, -1, dtype=np.int64),
         events=np.zeros((MAX_CONTACT_EVENTS, 4)),
         event_count=np.zeros(1, dtype=np.int64),
     )
-    for j in np.flatnonzero(~in_contact):  # already off the rail at t = 0
-        contact.events[contact.event_count[0]] = (j, 0.0, wheels.x0[j], -1.0)
-        contact.open_event[j] = contact.event_count[0]
-        contact.event_count[0] += 1
     diverged = None
-    chunk = max(1, math.ceil(n_steps / PROGRESS_CALLS))
-    for start in range(0, n_steps, chunk):
-        stop = min(start + chunk, n_steps)
+    chunk = max(1, math.ceil(nt / PROGRESS_CALLS))
+    for start in range(0, nt, chunk):
+        stop = min(start + chunk, nt)
         status = kernels.advance(
             start,
             stop,
+            n_steps,
             dt,
             ZHAI_PHI,
             ZHAI_PSI,
@@ -207,7 +211,7 @@ def integrate(
             diverged = stop  # a mode the outputs do not see has blown up
             break
         if progress is not None:
-            progress(stop / n_steps)
+            progress(stop / nt)
     n_events = int(contact.event_count[0])
     events = contact.events[: min(n_events, MAX_CONTACT_EVENTS)]
     still_open = events[:, 3] < 0.0
@@ -386,32 +390,35 @@ def winkler_block_displacement(scenario: Scenario, t_s: np.ndarray) -> np.ndarra
     k = K_r K_s/((K_r + K_s) L_s), superposed over the wheels at their positions at ``t_s``; the
     block, in series under the fastener, moves K_r/(K_r + K_s) = k L_s/K_s of the rail deflection.
 
-    Each wheel is summed over |ξ| < ``WINKLER_REACH``/β only, where the deflection exceeds
-    e^{−40} of its peak.
+    Each wheel is summed over β|ξ| < ``WINKLER_REACH`` only, where the deflection exceeds
+    e^{−40} of its peak, by :func:`model.track.kernels.winkler_shape_sum`.
 
     Parameters
     ----------
     scenario : Scenario
     t_s : ndarray
-        Increasing times (s) from the start of the passage, 1-D.
+        Uniformly spaced increasing times (s) from the start of the passage, 1-D.
 
     Returns
     -------
     ndarray
         Block displacement (m, down +), same shape as ``t_s``.
+
+    Raises
+    ------
+    ValueError
+        If ``t_s`` is not uniformly spaced.
     """
     track, train = scenario.track, scenario.train
     beta, modulus = track.winkler_beta, track.winkler_modulus
-    x_mon = 0.5 * scenario.rail_length
     t = np.asarray(t_s, dtype=float)
-    rail = np.zeros(t.shape)
-    reach = WINKLER_REACH / beta
-    for x0 in wheel_start_positions(scenario):  # each wheel only where it deflects the block
-        lo, hi = np.searchsorted(
-            t, [(x_mon - x0 - reach) / train.speed, (x_mon - x0 + reach) / train.speed]
-        )
-        xi = np.abs(x0 + train.speed * t[lo:hi] - x_mon) * beta
-        rail[lo:hi] += np.exp(-xi) * (np.cos(xi) + np.sin(xi))
+    step = float(t[1] - t[0]) if t.size > 1 else 1.0
+    if t.size > 2 and np.max(np.abs(np.diff(t) - step)) > 1e-9 * abs(step):
+        raise ValueError("t_s must be uniformly spaced (the passage's output times)")
+    pass_times = (0.5 * scenario.rail_length - wheel_start_positions(scenario)) / train.speed
+    rail = kernels.winkler_shape_sum(
+        float(t[0]) if t.size else 0.0, step, t.size, pass_times, beta * train.speed, WINKLER_REACH
+    )
     rail *= scenario.vehicle.static_wheel_load * beta / (2.0 * modulus)
     return rail * track.support_stiffness / track.pad_stiffness  # Z_s = F/K_s, F = k L_s w
 
