@@ -46,6 +46,7 @@ PUBLIC_API = {
     "load_triaxial_csv": "model.longterm.calibration",
     "run_study": "model.study.execution",
     "aggregate": "model.study.tables",
+    "settlement_band": "model.study.band",
     "run_fe": "model.fe.analysis",
 }
 """Public name → the module that defines it."""

@@ -33,6 +33,7 @@ REQUIRED_API = (
     "point_load_response",
     "fit_strain_law",
     "run_study",
+    "settlement_band",
     "run_fe",
     "fra_psd",
     "synthesize_profile",

@@ -105,15 +105,16 @@ def _check_calibration_data(n_cycles, values, stress_ratio, source: str, name="s
     return arrays
 
 
-def _log_linear_fit(cycles, values, ratio) -> tuple[np.ndarray, np.ndarray, float]:
-    """Least squares of log y = c0 + c1 log(ratio) + c2 log N: coefficients, errors, s."""
+def _log_linear_fit(cycles, values, ratio) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """Least squares of log y = c0 + c1 log(ratio) + c2 log N: coefficients, errors, s and
+    the coefficients' covariance s² (XᵀX)⁻¹."""
     design = np.column_stack([np.ones_like(cycles), np.log(ratio), np.log(cycles)])
     target = np.log(values)
     coefficients, *_ = np.linalg.lstsq(design, target, rcond=None)
     residual = target - design @ coefficients
     variance = float(residual @ residual) / (cycles.size - N_LAW_PARAMETERS)
-    errors = np.sqrt(variance * np.diag(np.linalg.inv(design.T @ design)))
-    return coefficients, errors, math.sqrt(variance)
+    covariance = variance * np.linalg.inv(design.T @ design)
+    return coefficients, np.sqrt(np.diag(covariance)), math.sqrt(variance), covariance
 
 
 def _refuse_implausible(fit: dict[str, float], layer_names: dict[str, str], law: str) -> None:
@@ -156,7 +157,9 @@ def fit_strain_law(n_cycles, strain_percent, stress_ratio) -> dict[str, float]:
     -------
     dict
         ``a`` (%), ``b``, ``m``, their standard errors ``a_se``, ``b_se``, ``m_se``,
-        ``log_a_se``, ``n_points`` and ``residual_std`` (of log ε_p).
+        ``log_a_se``, ``n_points``, ``residual_std`` (of log ε_p) and ``covariance``, the
+        3 × 3 covariance of (log a, m, b) as nested lists (``model.study.band`` draws the
+        constants from it).
 
     Raises
     ------
@@ -168,7 +171,7 @@ def fit_strain_law(n_cycles, strain_percent, stress_ratio) -> dict[str, float]:
     cycles, strain, ratio = _check_calibration_data(
         n_cycles, strain_percent, stress_ratio, "calibration data"
     )
-    coefficients, errors, residual_std = _log_linear_fit(cycles, strain, ratio)
+    coefficients, errors, residual_std, covariance = _log_linear_fit(cycles, strain, ratio)
     a = float(np.exp(coefficients[0]))
     fit = {
         "a": a,
@@ -180,6 +183,7 @@ def fit_strain_law(n_cycles, strain_percent, stress_ratio) -> dict[str, float]:
         "b_se": float(errors[2]),
         "n_points": int(cycles.size),
         "residual_std": residual_std,
+        "covariance": covariance.tolist(),
     }
     _refuse_implausible(fit, {"a": "a", "b": "b", "m": "m"}, "Li & Selig's law")
     return fit
@@ -221,7 +225,7 @@ def fit_pore_pressure_law(n_cycles, pore_pressure_ratio, stress_ratio, law: str 
         n_cycles, pore_pressure_ratio, stress_ratio, "calibration data", "pore_pressure_ratio"
     )
     if law == "power":
-        coefficients, errors, residual_std = _log_linear_fit(cycles, pore, ratio)
+        coefficients, errors, residual_std, _ = _log_linear_fit(cycles, pore, ratio)
         a_u = float(np.exp(coefficients[0]))
         fit = {
             "a_u": a_u,

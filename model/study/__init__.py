@@ -26,5 +26,8 @@ Modules:
   :func:`run_study` / :func:`execute_study`, with progress and cancelling;
 - ``tables``: the study's table, its input and output columns, the bands across seeds
   (:func:`aggregate`) and study folders written and read;
+- ``band``: :func:`settlement_band`, the 5–50–95 % band of the long-term settlement by Monte
+  Carlo over irregularity seeds, law constants and site properties (the passage once per
+  seed), and ``python -m model band``;
 - ``cli``: ``python -m model study``.
 """

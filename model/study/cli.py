@@ -81,7 +81,7 @@ def build_parser(prog: str = "python -m model study") -> argparse.ArgumentParser
     return parser
 
 
-def _parse_seeds(text: str, base_seed: int) -> list[int]:
+def parse_seeds(text: str, base_seed: int) -> list[int]:
     """``N`` → N seeds from the base scenario's; ``a,b,c`` → those seeds."""
     try:
         if "," in text:
@@ -118,7 +118,7 @@ def study_from_args(args: argparse.Namespace) -> Study:
     return define_study(
         base,
         vary,
-        seeds=_parse_seeds(args.seeds, base.irregularity.seed),
+        seeds=parse_seeds(args.seeds, base.irregularity.seed),
         sampling=args.sampling,
         n_samples=args.samples,
         sampling_seed=args.sampling_seed,

@@ -60,18 +60,36 @@ def run_summary(scenario_json: str, depth_profile: bool = False) -> dict[str, fl
     dict
         :meth:`Results.summary` (SI units), plus the depth profile if asked.
     """
-    # Parallelism comes from running many tasks at once, one per worker thread: Numba's prange
-    # kernels use one thread per task so they do not oversubscribe the cores (Dask's nanny
-    # already sets OMP/MKL/OpenBLAS to one thread per worker process). Setting it here, rather
-    # than NUMBA_NUM_THREADS in the worker's environment, also holds on workers started by hand.
-    numba.set_num_threads(1)
-    results = run(Scenario.from_json(scenario_json), cache=_TASK_CACHE)
+    results = run_in_worker(Scenario.from_json(scenario_json))
     row = results.summary()
     if depth_profile:
         soil = results.soil
         for depth, peak in zip(soil.depth_m, soil.peak_disp_m, strict=True):
             row[PROFILE_COLUMN.format(depth=float(depth))] = float(peak)
     return row
+
+
+def run_in_worker(scenario: Scenario):
+    """:func:`model.pipeline.run` as a task runs it: one Numba thread, the worker's stage cache.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run's inputs.
+
+    Returns
+    -------
+    Results
+        Equal to ``run(scenario)`` in-process, bit for bit (the cache serves what a fresh run
+        computes); runs that differ from the worker's last one only downstream of a stage
+        reuse that stage.
+    """
+    # Parallelism comes from running many tasks at once, one per worker thread: Numba's prange
+    # kernels use one thread per task so they do not oversubscribe the cores (Dask's nanny
+    # already sets OMP/MKL/OpenBLAS to one thread per worker process). Setting it here, rather
+    # than NUMBA_NUM_THREADS in the worker's environment, also holds on workers started by hand.
+    numba.set_num_threads(1)
+    return run(scenario, cache=_TASK_CACHE)
 
 
 # ---- running -------------------------------------------------------------------------------
@@ -242,21 +260,45 @@ def submission_order(n_points: int, n_seeds: int, rounds: int = SEED_ROUNDS) -> 
 
 
 def _collect(client, study: Study, progress, cancel) -> tuple[dict[int, dict], bool]:
-    """Submit every run (:func:`submission_order`), gather rows as they finish; on cancel,
-    stop the rest and wait."""
+    """Submit every run of the study (:func:`submission_order`), gather rows as they finish
+    (see :func:`collect_tasks`)."""
+    tasks = [
+        (row, run_summary, (scenario_json, study.depth_profile))
+        for row, scenario_json in study.runs()
+    ]
+    order = submission_order(len(study.points), len(study.seeds))
+    return collect_tasks(client, tasks, progress, cancel, order=order)
+
+
+def collect_tasks(client, tasks, progress, cancel, order=None) -> tuple[dict[int, dict], bool]:
+    """Submit tasks, gather their rows as they finish; on cancel, stop the rest and wait.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        Where the tasks run.
+    tasks : list of (dict, callable, tuple)
+        Per task: its input columns, and a function returning a dict of results called with
+        the arguments; its row is the inputs and the results (or ``error``, its message).
+    progress, cancel
+        As in :func:`run_study`.
+    order : list of int, optional
+        The order the tasks are submitted in (a permutation of their places); default as given.
+
+    Returns
+    -------
+    (rows, cancelled)
+        Rows by the task's place in ``tasks``; True when stopped by ``cancel`` or Ctrl-C.
+    """
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:12]
-    runs = list(study.runs())
-    inputs = [row for row, _ in runs]
-    futures = [None] * len(runs)
-    for index in submission_order(len(study.points), len(study.seeds)):
+    inputs = [row for row, _, _ in tasks]
+    futures = [None] * len(tasks)
+    for index in range(len(tasks)) if order is None else order:
+        _, function, arguments = tasks[index]
         futures[index] = client.submit(
-            run_summary,
-            runs[index][1],
-            study.depth_profile,
-            key=f"tunnelsettle-run-{token}-{index}",
-            pure=False,
+            function, *arguments, key=f"tunnelsettle-run-{token}-{index}", pure=False
         )
     index_of = {future.key: index for index, future in enumerate(futures)}
     rows: dict[int, dict] = {}
