@@ -22,10 +22,12 @@ RAW_LIBRARY_TEXT = re.compile(r"parameter '|<class|valid options|only takes|must
 
 
 def _parameters():
-    """(path, parameter) of every input of a scenario."""
+    """(path, parameter) of every input of a scenario. ``site.layers`` is a list of layers,
+    each refusing its own properties as ``site.layers[i].name`` (tests/test_site.py and
+    tests/test_site_view.py walk those)."""
     for section in SECTIONS:
         for name, p in Scenario.param[section].class_.param.objects("existing").items():
-            if name != "name":
+            if name != "name" and not isinstance(p, param.List):
                 yield f"{section}.{name}", p
 
 
