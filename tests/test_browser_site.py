@@ -101,7 +101,7 @@ def test_a_table_edit_reruns_and_a_refused_one_says_why(site_page):
     page.keyboard.press("Control+A")
     page.keyboard.type("-5")
     page.keyboard.press("Enter")
-    refusal = page.get_by_text("thickness = -5.0 is outside the allowed range").first
+    refusal = page.get_by_text("thickness = -5 m is outside the allowed range").first
     refusal.wait_for(timeout=RUN_WAIT_MS)
     assert "site.layers[1]" in refusal.inner_text() and "'soft clay'" in refusal.inner_text()
     expect(cell).to_have_text("25", timeout=RUN_WAIT_MS)  # the table shows the layers kept

@@ -37,8 +37,8 @@ pytestmark = [
     ),
 ]
 
-LONGTERM_TITLES = (
-    "Long-term settlement",
+LONGTERM_TITLES = (  # beginnings of the titles (the settlement's states its value)
+    "Settlement at the invert",
     "Permanent strain after 20 years",
     "Dynamic deviator over static strength",
 )
@@ -108,7 +108,10 @@ def new_page(browser, url: str, width: int = 1400, query: str = CHEAP_QUERY):
 def show_tab(page, title: str) -> None:
     page.locator(".bk-tab", has_text=title).click()
     page.wait_for_function(
-        f"""() => {list(LONGTERM_TITLES)!r}.every(t => ({GEOMETRY_JS})()[t])"""
+        f"""() => {{
+          const shown = Object.keys(({GEOMETRY_JS})());
+          return {list(LONGTERM_TITLES)!r}.every(t => shown.some(s => s.startsWith(t)));
+        }}"""
         if title.startswith("Long-term")
         else "() => true",
         timeout=RUN_WAIT_MS,
@@ -153,7 +156,7 @@ def test_the_long_term_plots_survive_an_upload(served, browser):
     )
     page.evaluate(PAINTED_JS)
     shown = page.evaluate(GEOMETRY_JS)
-    assert set(LONGTERM_TITLES) <= set(shown)
+    assert all(any(s.startswith(t) for s in shown) for t in LONGTERM_TITLES), shown
     assert badly_laid_out(page) == {}
     page.context.close()
 
