@@ -145,7 +145,7 @@ def test_the_long_term_plots_survive_an_upload(served, browser):
     page = new_page(browser, served[0])
     show_tab(page, "Long-term settlement")
     assert badly_laid_out(page) == {}
-    page.get_by_text("Calibrate the strain law").click()
+    page.get_by_text("Calibrate the strain and pore-pressure laws").click()
     page.locator("input[type=file][accept='.csv,.txt']").set_input_files(
         DATA_DIR / "triaxial_synthetic.csv"
     )
