@@ -28,12 +28,13 @@ from dashboard.messages import Messages
 from dashboard.page import PAGE_CSS, close_drawer_in_narrow_windows
 from dashboard.passage_view import PassageView
 from dashboard.report import report_button
-from dashboard.runs import SessionRuns
+from dashboard.runs import SessionRuns, admitted
 from dashboard.scheduler import EXECUTOR, warm_up, warm_up_run
 from dashboard.study_view import StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
 from model.params import Scenario
+from model.params.measured_profile import admit_profile, data_folder
 from model.pipeline import StageCache, run
 
 
@@ -84,14 +85,14 @@ class Dashboard(pn.viewable.Viewer):
         self.whatif = WhatIfPanel(
             current=lambda: (self.scenario, self.runs.results),
             restore=self.inputs.replace_scenario,
-            compute=lambda scenario: run(scenario, cache=self.cache),
+            compute=lambda scenario: run(admitted(scenario), cache=self.cache),
             preset=lambda: self.inputs.base_preset,
         )
         self.passage = PassageView(self.whatif, companions=self.runs.depth_companions)
         self.longterm = LongTermView(self.scenario.longterm, self.scenario.site)
         self.ground = GroundView()
         self.runs.views = (self.passage, self.longterm, self.ground)
-        self.study = StudyView(scenario_source=lambda: self.scenario.copy())
+        self.study = StudyView(scenario_source=lambda: admitted(self.scenario.copy()))
         self.report_button = report_button(
             results=lambda: self.runs.results,
             scenario_name=lambda: self.inputs.preset_select.value,
@@ -117,6 +118,11 @@ class Dashboard(pn.viewable.Viewer):
         """
         decoded = {key: values[-1].decode("utf-8", "replace") for key, values in args.items()}
         preset, scenario, problems = scenarios.scenario_from_arguments(decoded)
+        try:  # a profile path from a URL is read only inside the data folder
+            admit_profile(scenario, data_folder())
+        except ValueError as error:
+            scenario.irregularity.profile_csv = None
+            problems.append(str(error))
         dashboard = cls(scenario=scenario, preset=preset, **params)
         dashboard.inputs.show_matching()
         if problems:

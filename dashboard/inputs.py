@@ -2,7 +2,10 @@
 per parameter (the main ones up front, the rest in collapsible groups) and the scenario file.
 
 They edit the session's :class:`~model.params.Scenario` in place; controls come from the
-parameters (:mod:`dashboard.controls`), presets and train types from :mod:`model.scenarios`.
+parameters (:mod:`dashboard.controls`), presets and train types from :mod:`model.scenarios`, the
+measured-profile upload from :mod:`dashboard.profile_input`. A profile path in a loaded
+scenario file is read only inside the server's data folder
+(:func:`model.params.measured_profile.admit_profile`).
 A refused value is reported beside its field until the next accepted change; a bad file in
 the page's messages (:mod:`dashboard.messages`).
 """
@@ -18,8 +21,10 @@ import param
 
 from dashboard.controls import ParameterControl
 from dashboard.messages import Messages
+from dashboard.profile_input import ProfileInput
 from model import scenarios
 from model.params import SECTIONS, Scenario
+from model.params.measured_profile import admit_profile, data_folder
 
 PRIMARY = ("train.speed_kmh", "soil.youngs_modulus", "track.fastener_stiffness")
 """Main inputs, shown up front; every other parameter sits in its section's collapsible group."""
@@ -40,8 +45,8 @@ GROUP_TITLES = {
 }
 """Collapsible groups in display order: section → title."""
 
-HIDDEN = {"irregularity.profile_csv", "site.layers"}
-"""Not offered as a control: a measured profile is a server-side file, set in a scenario file;
+HIDDEN = {"irregularity.profile_csv", "irregularity.profile_data", "site.layers"}
+"""Not offered as a control: a measured profile is uploaded (:mod:`dashboard.profile_input`);
 the site's layers are edited in the long-term tab's layer table (:mod:`dashboard.site_view`)."""
 
 
@@ -103,6 +108,9 @@ class InputsPanel:
             obj = getattr(scenario, section)
             obj.param.watch(self._on_parameter, [n for n in obj.param if n != "name"])
 
+        self.profile = ProfileInput(scenario.irregularity, messages)
+        """The measured-profile upload, in the track irregularity group."""
+
         self._preset_descriptions = scenarios.preset_descriptions()
         self.preset_select = pn.widgets.Select(
             label="Preset",
@@ -148,7 +156,8 @@ class InputsPanel:
                     control
                     for path, control in self.controls.items()
                     if path.startswith(f"{section}.") and path not in up_front
-                ],
+                ]
+                + (self.profile.widgets() if section == "irregularity" else []),
                 title=title,
                 css_classes=[f"group-{section}"],
             )
@@ -242,7 +251,8 @@ class InputsPanel:
         filename = self.load_input.filename or "the file"
         self.load_input.clear()  # so that loading the same file again is a new event
         try:
-            scenario = Scenario.from_json(event.new.decode("utf-8"))
+            scenario = Scenario.from_json(event.new)
+            admit_profile(scenario, data_folder())  # a path: only inside the data folder
         except (ValueError, KeyError, TypeError, AttributeError) as error:
             self.messages.show_error(
                 f"Could not load {filename} as a scenario:", [scenarios.error_text(error)]

@@ -30,6 +30,7 @@ from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of
 from model import scenarios
 from model.fe.store import FEResult, stored_fe_result
 from model.params import Scenario, ScenarioError
+from model.params.measured_profile import admit_profile, data_folder
 from model.pipeline import STAGES, Results, SimulationError, StageCache, run, stage_keys
 
 log = logging.getLogger(__name__)
@@ -83,6 +84,13 @@ class ResultsView(Protocol):
 
     def settle(self) -> None:
         """The run that was awaited failed: keep showing the previous results."""
+
+
+def admitted(scenario: Scenario) -> Scenario:
+    """``scenario``, holding its measured profile by content: the last guard before the server
+    computes (every way in admits already), so no run here opens a file a user named."""
+    admit_profile(scenario, data_folder())
+    return scenario
 
 
 def _stage_name(stage: str) -> str:
@@ -236,14 +244,14 @@ class SessionRuns(param.Parameterized):
         FE result of the scenario."""
         if self.warm is not None:
             self.warm.result()  # the kernels compile once, not once per waiting session
-        results = run(scenario, progress=self._note_progress, cache=self.cache)
+        results = run(admitted(scenario), progress=self._note_progress, cache=self.cache)
         return results, stored_fe_result(scenario, FE_RESULTS_DIR)
 
     def _compute_companion(self, other: Scenario) -> Results | None:
         """The scenario with the other tunnel–soil model (in a worker thread; its vehicle–track
         and load stages come from the cache). A failure only leaves its curve out."""
         try:
-            return run(other, cache=self.cache)
+            return run(admitted(other), cache=self.cache)
         except (ValueError, SimulationError):
             return None
 

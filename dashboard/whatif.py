@@ -26,6 +26,7 @@ from typing import Any
 import pandas as pd
 
 from model.params import SECTIONS, Scenario
+from model.params.measured_profile import admit_profile, data_folder, parse_profile
 from model.pipeline import Results, StageCache, run
 
 MAX_PINNED = 8
@@ -120,6 +121,9 @@ def describe_change(path: str, value: Any) -> str:
         return f"{label} automatic"
     if isinstance(value, bool):
         return f"{label}: {'yes' if value else 'no'}"
+    if path == "irregularity.profile_data":  # the text itself: too long for a name
+        profile = parse_profile(value)
+        return f"measured profile ({profile.n_points} points, {profile.digest[:8]})"
     if isinstance(value, list):  # the site's layers, as records
         return f"{label} {', '.join(str(layer.get('name', '?')) for layer in value)}"
     if isinstance(value, int | float):
@@ -541,7 +545,9 @@ def _saved_run(entry: Any, index: int) -> SavedRun:
 def _scenario(data: Any, where: str) -> Scenario:
     """Scenario from a session file's inputs; bad values are refused naming ``where``."""
     try:
-        return Scenario.from_dict(data)
+        scenario = Scenario.from_dict(data)
+        admit_profile(scenario, data_folder())  # a path: only inside the data folder
+        return scenario
     except (ValueError, KeyError, TypeError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         raise ValueError(f"bad session file: {where}: {message}") from None

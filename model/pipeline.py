@@ -13,7 +13,6 @@ the invert under the monitored block, spread over one block spacing and summed o
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import threading
@@ -23,7 +22,6 @@ from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field, fields, is_dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,6 +29,7 @@ import numpy as np
 from model.longterm.geostatic import check_longterm_inputs
 from model.longterm.settlement import LongTermResult, long_term_settlement
 from model.params import Scenario, ScenarioError
+from model.params.measured_profile import profile_digest
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.soil.ground_vibration import GroundResponse, ground_summary
 from model.soil.halfspace_response import halfspace_response, halfspace_transfer
@@ -274,12 +273,13 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     vehicle_track = {
         section: data[section] for section in ("vehicle", "train", "track", "irregularity")
     }
-    profile_csv = scenario.irregularity.profile_csv
-    if profile_csv:  # an edited file must not be served from the cache, whatever its stat
-        path = Path(profile_csv)
-        vehicle_track["profile_file"] = (
-            hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
-        )
+    # a measured profile counts by its content (an edited file is not served from the cache,
+    # whatever its stat), and a profile's text enters the key as its digest (remembered)
+    vehicle_track["irregularity"] = {
+        **data["irregularity"],
+        "profile_data": None,
+        "profile_digest": profile_digest(scenario.irregularity),
+    }
     vehicle_track["numerics"] = pick(VEHICLE_TRACK_NUMERICS)
     load = {"upstream": vehicle_track, "numerics": pick(LOAD_NUMERICS)}
     moving_load = scenario.tunnel.model == "2.5d"

@@ -17,6 +17,7 @@ import pytest
 
 from model.params import SECTIONS, Choice, Count, Quantity, Scenario, Switch, Text
 from model.params.quantities import _format_range, number_text, split_label
+from model.params.track import ProfileText
 
 RAW_LIBRARY_TEXT = re.compile(r"parameter '|<class|valid options|only takes|must be an integer")
 
@@ -24,10 +25,11 @@ RAW_LIBRARY_TEXT = re.compile(r"parameter '|<class|valid options|only takes|must
 def _parameters():
     """(path, parameter) of every input of a scenario. ``site.layers`` is a list of layers,
     each refusing its own properties as ``site.layers[i].name`` (tests/test_site.py and
-    tests/test_site_view.py walk those)."""
+    tests/test_site_view.py walk those); a measured profile's text is refused with the reason
+    its parsing gives (tests/test_profile_access.py)."""
     for section in SECTIONS:
         for name, p in Scenario.param[section].class_.param.objects("existing").items():
-            if name != "name" and not isinstance(p, param.List):
+            if name != "name" and not isinstance(p, param.List | ProfileText):
                 yield f"{section}.{name}", p
 
 

@@ -16,6 +16,8 @@ Modules, in the order of the chain:
   (:func:`refusal`), :class:`ScenarioError`, g and the package data files;
 - ``vehicle``: :class:`Vehicle` (one car's masses and suspensions), :class:`Train`;
 - ``track``: :class:`Track` (rail, fasteners, blocks, wheel contact), :class:`Irregularity`;
+- ``measured_profile``: a measured rail profile's CSV format and checks, and which profile
+  files a run may read (any for the command line, only the data folder's for a server);
 - ``ground``: :class:`Tunnel` (the lining), :class:`Soil`;
 - ``numerics``: :class:`Numerics`, the discretisation of every stage;
 - ``site``: :class:`Site` (the soil layers top down and the water table), :class:`Layer`;

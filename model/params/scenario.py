@@ -325,7 +325,12 @@ class Scenario(param.Parameterized):
                 "how the tunnel scatters it (docs/halfspace.md)"
             )
         profile = irr.profile_csv
-        if irr.enabled and profile and not Path(profile).is_file():
+        if profile and irr.profile_data is not None:
+            problems.append(
+                "irregularity.profile_csv and irregularity.profile_data are both set: a "
+                "measured profile is given by its file or by its text, not both"
+            )
+        elif irr.enabled and profile and not Path(profile).is_file():
             problems.append(
                 f"irregularity.profile_csv = {profile!r} is not a file"
                 + ("" if Path(profile).is_absolute() else f" (relative to {Path.cwd()})")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import param
 
+from model.params.measured_profile import parse_profile
 from model.params.quantities import Choice, Count, Switch, Text, _q
 
 # Hertz contact constant G = a R^b × 1e-8 m/N^(2/3) (Zhai's empirical fits), by wheel tread type.
@@ -155,6 +156,16 @@ class Track(param.Parameterized):
         return self.hertz_constant * wheel_load ** (2.0 / 3.0)
 
 
+class ProfileText(param.String):
+    """The CSV text of a measured profile, or None; parsed and checked at assignment
+    (:func:`model.params.measured_profile.parse_profile`), so a scenario never holds a bad one."""
+
+    def _validate_value(self, val, allow_None):
+        super()._validate_value(val, allow_None)
+        if val is not None:
+            parse_profile(val, "irregularity.profile_data")
+
+
 class Irregularity(param.Parameterized):
     """Vertical rail-profile irregularity: US FRA PSD, trigonometric-series synthesis (§2.4).
 
@@ -213,8 +224,19 @@ class Irregularity(param.Parameterized):
         None,
         allow_None=True,
         label="Measured profile CSV",
-        doc="Path of a measured profile (columns x in m measured from the monitored block, η in "
-        "m or mm), read by model.track.irregularity.load_profile_csv; replaces the synthetic "
-        "profile when set. A relative path in a scenario file is resolved against that file's "
-        "folder (Scenario.from_file).",
+        doc="Path of a measured profile file (format of model.params.measured_profile: x in m "
+        "from the monitored block, η in m or mm), read by model.track.irregularity.profile_for "
+        "and replacing the synthetic profile. A relative path in a scenario file is resolved "
+        "against that file's folder (Scenario.from_file). Read as given by the command line and "
+        "the Python API only; the dashboard accepts the name of a file in its data folder "
+        "($TUNNELSETTLE_DATA_DIR) and reads it into profile_data (measured_profile.admit_profile).",
+    )
+    profile_data = ProfileText(
+        None,
+        allow_None=True,
+        label="Measured profile (CSV text)",
+        doc="A measured profile held by content: the CSV text itself (the format of "
+        "model.params.measured_profile, at most MAX_PROFILE_BYTES), as uploaded in the "
+        "dashboard or saved in a scenario file, read by model.track.irregularity.profile_for "
+        "in place of the synthetic profile. Not together with profile_csv.",
     )

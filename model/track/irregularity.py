@@ -10,13 +10,17 @@ bump. A measured profile must be given in this convention.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numba
 import numpy as np
 import scipy.fft
 
 from model.params import FRA_ROUGHNESS_CM2_RAD_PER_M, Irregularity
+from model.params.measured_profile import (
+    MeasuredProfile,
+    parse_profile,
+    read_profile_file,
+)
 
 FRA_SCALE_FACTOR = 0.25  # k of the FRA formula (docs/model.md §4)
 FRA_CUTOFF_WAVENUMBER = 0.8245  # Ω_c (rad/m)
@@ -25,8 +29,6 @@ CM2_TO_M2 = 1e-4
 # A grid counts as uniform when every point is within this fraction of the step of the ideal
 # grid; the profile's slope is O(1e-3), so the resulting error is below 1e-9 · step.
 _UNIFORM_GRID_TOLERANCE = 1e-6
-
-_ETA_UNITS_TO_M = {"eta_m": 1.0, "eta_mm": 1e-3}
 
 
 def _check_track_class(track_class) -> int:
@@ -221,17 +223,18 @@ def synthesize_profile(
 
 
 def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
-    """Measured vertical profile from a CSV file.
+    """Measured vertical profile from a CSV file named by the person running the program.
 
-    Format (UTF-8, with or without a byte-order mark): lines starting with ``#`` and blank lines
-    are ignored; the first other line is the header ``x_m,eta_m`` or ``x_m,eta_mm`` (η in mm is
-    converted to m); then one ``x,η`` pair per line, at least two, x strictly increasing, all
-    values finite. η follows the project's convention: positive is a dip.
+    The format is :mod:`model.params.measured_profile`'s: ``#`` comments and blank lines
+    ignored, the header ``x_m,eta_m`` or ``x_m,eta_mm`` (η in mm is converted to m), then at
+    least two ``x,η`` lines, x strictly increasing, all values finite. η follows the
+    project's convention: positive is a dip.
 
     Parameters
     ----------
     path : str or Path
-        File to read.
+        File to read (any readable regular file: servers go through
+        :func:`model.params.measured_profile.admit_profile` instead).
 
     Returns
     -------
@@ -243,62 +246,29 @@ def load_profile_csv(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ValueError
-        If the file cannot be read, is not UTF-8 or is malformed; the message names the file
-        (and the line number and the fault).
+        If the file cannot be read, is not a regular file, not UTF-8 or malformed; the message
+        names the file, the line number and the fault (never a line's text).
     """
-    path = Path(path)
-    try:
-        lines = path.read_bytes().decode("utf-8-sig").splitlines()
-    except OSError as error:
-        raise ValueError(f"{path}: cannot read the profile file ({error.strerror})") from None
-    except UnicodeDecodeError as error:
-        raise ValueError(
-            f"{path}: not UTF-8 text (byte {error.start}: {error.reason}); save the profile "
-            "as UTF-8 or plain ASCII"
-        ) from None
-    to_m = None
-    x_values: list[float] = []
-    eta_values: list[float] = []
-    for number, raw in enumerate(lines, start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        fields = [field.strip() for field in line.split(",")]
-        where = f"{path}, line {number}"
-        if to_m is None:
-            if len(fields) != 2 or fields[0] != "x_m" or fields[1] not in _ETA_UNITS_TO_M:
-                raise ValueError(f"{where}: header {line!r} must be 'x_m,eta_m' or 'x_m,eta_mm'")
-            to_m = _ETA_UNITS_TO_M[fields[1]]
-            continue
-        if len(fields) != 2:
-            raise ValueError(
-                f"{where}: expected 2 comma-separated values, found {len(fields)} in {line!r}"
-            )
-        try:
-            x, eta = float(fields[0]), float(fields[1])
-        except ValueError:
-            raise ValueError(f"{where}: {line!r} is not two numbers") from None
-        if not (math.isfinite(x) and math.isfinite(eta)):
-            raise ValueError(f"{where}: {line!r} contains a non-finite value")
-        if x_values and x <= x_values[-1]:
-            raise ValueError(
-                f"{where}: x = {x!r} m does not exceed the previous x = "
-                f"{x_values[-1]!r} m; x must be strictly increasing"
-            )
-        x_values.append(x)
-        eta_values.append(eta * to_m)
-    if to_m is None:
-        raise ValueError(f"{path}: no header line 'x_m,eta_m' or 'x_m,eta_mm' found")
-    if len(x_values) < 2:
-        raise ValueError(f"{path}: {len(x_values)} data line(s); at least 2 are needed")
-    return np.array(x_values), np.array(eta_values)
+    profile = parse_profile(read_profile_file(path), str(path))
+    return profile.x_m, profile.eta_m
+
+
+def measured_profile(irregularity: Irregularity) -> MeasuredProfile | None:
+    """The measured profile of an Irregularity (its text, else its file), or None."""
+    if irregularity.profile_data is not None:
+        return parse_profile(irregularity.profile_data)
+    if irregularity.profile_csv:
+        path = irregularity.profile_csv
+        return parse_profile(read_profile_file(path), str(path))
+    return None
 
 
 def profile_for(irregularity: Irregularity, x_m) -> np.ndarray:
     """Rail profile η (m, positive downward) at positions ``x_m`` for an Irregularity.
 
-    Zeros if ``irregularity.enabled`` is false; else the measured profile of
-    ``irregularity.profile_csv``, linearly interpolated, if set; else
+    Zeros if ``irregularity.enabled`` is false; else the measured profile
+    (:func:`measured_profile`: ``irregularity.profile_data``, else the file
+    ``irregularity.profile_csv``), linearly interpolated, if set; else
     :func:`synthesize_profile` with the object's class, seed, wavelength band and number of
     components.
 
@@ -323,13 +293,14 @@ def profile_for(irregularity: Irregularity, x_m) -> np.ndarray:
     x = np.asarray(x_m, dtype=float)
     if not irregularity.enabled:
         return np.zeros_like(x)
-    if irregularity.profile_csv:
-        x_measured, eta_measured = load_profile_csv(irregularity.profile_csv)
+    profile = measured_profile(irregularity)
+    if profile is not None:
+        x_measured, eta_measured = profile.x_m, profile.eta_m
         if x.size and (x.min() < x_measured[0] or x.max() > x_measured[-1]):
+            name = irregularity.profile_csv or "irregularity.profile_data"
             raise ValueError(
                 f"x_m spans [{x.min():g}, {x.max():g}] m but the measured profile "
-                f"{irregularity.profile_csv} covers only [{x_measured[0]:g}, "
-                f"{x_measured[-1]:g}] m"
+                f"{name} covers only [{x_measured[0]:g}, {x_measured[-1]:g}] m"
             )
         return np.interp(x, x_measured, eta_measured)
     return synthesize_profile(
