@@ -146,7 +146,7 @@ def test_the_long_term_plots_survive_an_upload(served, browser):
     show_tab(page, "Long-term settlement")
     assert badly_laid_out(page) == {}
     page.get_by_text("Calibrate the strain and pore-pressure laws").click()
-    page.locator("input[type=file][accept='.csv,.txt']").set_input_files(
+    page.locator("input[type=file][accept='.csv,.txt']").last.set_input_files(
         DATA_DIR / "triaxial_synthetic.csv"
     )
     page.get_by_text("Fit of triaxial_synthetic.csv").wait_for(timeout=RUN_WAIT_MS)
