@@ -44,8 +44,11 @@ def test_zero_cvs_and_one_seed_give_a_zero_width_band_equal_to_the_deterministic
     table = settlement_band(scenario, n_draws=3, seeds=1, scheduler=client)
     expected = run(scenario).longterm
     np.testing.assert_array_equal(table["years"], expected.years)
-    for column in ("p05", "p50", "p95"):  # exactly: the same run three times
-        np.testing.assert_array_equal(table[column], expected.settlement_m)
+    for column in ("p05", "p95"):  # exactly: the same run three times, a zero-width band
+        np.testing.assert_array_equal(table[column], table["p50"])
+    # the worker's run against this process's: equal to rounding (a worker computes with one
+    # Numba thread, this process with several; 2e-14 relative seen on a fresh machine)
+    np.testing.assert_allclose(table["p50"], expected.settlement_m, rtol=1e-12, atol=0.0)
     assert table.attrs["n_draws"] == 3 and table.attrs["errors"] == {}
 
 
