@@ -35,7 +35,7 @@ from dashboard.whatif_view import WhatIfPanel
 from model import scenarios
 from model.params import Scenario
 from model.params.measured_profile import admit_profile, data_folder
-from model.pipeline import StageCache, run
+from model.pipeline import Results, StageCache, run
 
 
 class Dashboard(pn.viewable.Viewer):
@@ -85,11 +85,13 @@ class Dashboard(pn.viewable.Viewer):
         self.whatif = WhatIfPanel(
             current=lambda: (self.scenario, self.runs.results),
             restore=self.inputs.replace_scenario,
-            compute=lambda scenario: run(admitted(scenario), cache=self.cache),
+            compute=self.compute,
             preset=lambda: self.inputs.base_preset,
         )
         self.passage = PassageView(self.whatif, companions=self.runs.depth_companions)
-        self.longterm = LongTermView(self.scenario.longterm, self.scenario.site)
+        self.longterm = LongTermView(
+            self.scenario.longterm, self.scenario.site, compute=self.compute, threaded=self.threaded
+        )
         self.ground = GroundView()
         self.runs.views = (self.passage, self.longterm, self.ground)
         self.study = StudyView(scenario_source=lambda: admitted(self.scenario.copy()))
@@ -172,6 +174,11 @@ class Dashboard(pn.viewable.Viewer):
         )
 
     # ---- connections ------------------------------------------------------------------------
+    def compute(self, scenario: Scenario) -> Results:
+        """One run outside the session's run queue (what-if loads, the smooth rail), with the
+        session's stage cache."""
+        return run(admitted(scenario), cache=self.cache)
+
     def refresh(self) -> None:
         """Bring the results up to date with the scenario (see :meth:`SessionRuns.refresh`)."""
         self.runs.refresh()

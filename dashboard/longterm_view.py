@@ -20,6 +20,7 @@ import panel as pn
 import param
 from bokeh.models import CustomJSTickFormatter
 
+from dashboard.longterm_checks import SettlementBandPanel, SmoothRailPanel, settlement_plot
 from dashboard.plot_panes import PlotPanes, PlotsView
 from dashboard.plots import MM, PLOT_MIN_WIDTH, PLOT_OPTIONS, PlotSpec, legend_options
 from dashboard.site_view import (
@@ -35,6 +36,7 @@ from model.longterm.calibration import (
     fit_strain_law,
     parse_triaxial_csv,
 )
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import Layer, LongTerm, Site
 from model.pipeline import Results
 
@@ -128,6 +130,7 @@ def law_statement(results: Results) -> str:
     lt = results.longterm
     depth90 = f"{lt.depth90_m:.3g} m" if np.isfinite(lt.depth90_m) else "–"
     lines = [
+        f"**What it covers:** {SETTLEMENT_COVERS}.",
         f"**Law:** {lt.statement}",
         f"**{lt.pore_pressure_statement.partition(':')[0]}:**"
         f"{lt.pore_pressure_statement.partition(':')[2]}",
@@ -231,7 +234,7 @@ def apply_pore_fit(longterm: LongTerm, layer: Layer, fit: dict[str, float]) -> N
 
 
 LONGTERM_PLOTS = (
-    PlotSpec("longterm_settlement", "longterm", SITE_PLOTS[0].draw),
+    PlotSpec("longterm_settlement", "longterm", settlement_plot),
     PlotSpec("longterm_strain", "longterm", strain_depth_plot),
     PlotSpec("longterm_stress_ratio", "longterm", stress_ratio_depth_plot),
     *SITE_PLOTS[1:],
@@ -239,6 +242,8 @@ LONGTERM_PLOTS = (
 """The long-term plots with the stage they read, in the form of ``dashboard.plots.PLOTS``."""
 PORE_PRESSURE_PLOT = "longterm_pore_pressure"
 """The plot drawn at the years the view's year choice gives."""
+SETTLEMENT_PLOT = "longterm_settlement"
+"""The plot that draws the settlement band and the smooth rail's curve when there are."""
 
 
 class CalibrationPanel(pn.viewable.Viewer):
@@ -369,11 +374,33 @@ class LongTermView(PlotsView):
     site : Site
         The session's site profile; the layer table edits it, the calibration writes its fits
         into one of its layers.
+    compute : callable(Scenario) -> Results, optional
+        How the smooth-rail run is computed (the dashboard passes its run with its stage
+        cache); a run without a cache by default.
+    scheduler : None, str or distributed.Client
+        Where settlement bands run (see :func:`model.study.execution.study_client`).
+    threaded : bool
+        Compute bands and smooth-rail runs without blocking the caller (served app).
     """
 
-    def __init__(self, longterm: LongTerm, site: Site) -> None:
+    def __init__(
+        self,
+        longterm: LongTerm,
+        site: Site,
+        compute=None,
+        scheduler=None,
+        threaded: bool = False,
+    ) -> None:
         super().__init__()
-        self.law_statement = pn.pane.Markdown("", sizing_mode="stretch_width")
+        self.law_statement = pn.pane.Markdown(
+            "", sizing_mode="stretch_width", css_classes=["longterm-statement"]
+        )
+        self.band = SettlementBandPanel(
+            changed=self._on_checks, scheduler=scheduler, threaded=threaded
+        )
+        self.smooth_rail = SmoothRailPanel(
+            changed=self._on_checks, compute=compute, threaded=threaded
+        )
         self.layers = LayerTable(site=site)
         self.calibration = CalibrationPanel(site=site, longterm=longterm)
         self.years = pn.widgets.MultiChoice(
@@ -395,6 +422,13 @@ class LongTermView(PlotsView):
                 css_classes=["site-layers"],
             ),
             self.plots.flexbox(),
+            pn.Card(
+                pn.FlexBox(self.band, self.smooth_rail, sizing_mode="stretch_width"),
+                title="How sure, and the irregularity's share: settlement band, smooth rail",
+                collapsed=False,
+                sizing_mode="stretch_width",
+                css_classes=["longterm-checks"],
+            ),
             self.years,
             pn.Card(
                 self.calibration,
@@ -410,8 +444,23 @@ class LongTermView(PlotsView):
         return self._layout
 
     def _draw_arguments(self, spec: PlotSpec) -> dict:
-        """The chosen years for the pore-pressure plot; nothing for the others."""
+        """The chosen years for the pore-pressure plot, the band and the smooth rail for the
+        settlement plot; nothing for the others."""
+        if spec.key == SETTLEMENT_PLOT:
+            return {"band": self.band.table, "smooth": self.smooth_rail.smooth}
         return {"years": tuple(self.years.value)} if spec.key == PORE_PRESSURE_PLOT else {}
+
+    def _on_checks(self) -> None:
+        """A band or smooth-rail run arrived or went: a new settlement plot (its set of curves
+        changed) and statement."""
+        if self._results is not None:
+            self.plots.redraw(SETTLEMENT_PLOT, self._results)
+            self.law_statement.object = self._statement(self._results)
+
+    def _statement(self, results: Results) -> str:
+        """The laws' statement, with the irregularity's share once the smooth rail ran."""
+        share = self.smooth_rail.statement()
+        return law_statement(results) + (f"\n\n{share}" if share else "")
 
     def _on_years(self, event) -> None:
         """Another choice of years: a new pore-pressure plot (its set of curves changed)."""
@@ -419,7 +468,18 @@ class LongTermView(PlotsView):
             self.plots.redraw(PORE_PRESSURE_PLOT, self._results)
 
     def show(self, results: Results, redrawn: set[str]) -> None:
-        """The plots of the ``redrawn`` stages and the laws' statement follow ``results``."""
+        """The plots of the ``redrawn`` stages and the laws' statement follow ``results``; a
+        band or smooth rail of other inputs is dropped (and the settlement plot drawn anew)."""
         self._results = results
+        dropped = self.band.results_changed(results)
+        dropped = self.smooth_rail.results_changed(results) or dropped
         self.plots.show(results, redrawn)
-        self.law_statement.object = law_statement(results)
+        if dropped:
+            self.plots.redraw(SETTLEMENT_PLOT, results)
+        self.law_statement.object = self._statement(results)
+
+    def close(self) -> None:
+        """A closed session: its band stops, its plots are dropped."""
+        self.band.close()
+        self.smooth_rail.close()
+        super().close()

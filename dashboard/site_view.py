@@ -61,9 +61,11 @@ def _layer_labels(results: Results, x: float) -> hv.Labels:
     return hv.Labels((np.full(middle.size, x), middle, names), kdims=["x", DEPTH], vdims=["name"])
 
 
-def settlement_components_plot(results: Results) -> hv.Overlay:
+def settlement_components_plot(results: Results, behind=(), over=()) -> hv.Overlay:
     """Settlement at the invert against years of service (log axis), stacked: the plastic part
-    S_p, the consolidation part S_c on top of it, and the total S = S_p + S_c."""
+    S_p, the consolidation part S_c on top of it, and the total S = S_p + S_c; the elements
+    ``behind`` drawn under them and ``over`` on top (the long-term tab's band and smooth rail,
+    :mod:`dashboard.longterm_checks`)."""
     lt = results.longterm
     plastic = lt.plastic_settlement_m * MM
     total = lt.settlement_m * MM
@@ -85,8 +87,8 @@ def settlement_components_plot(results: Results) -> hv.Overlay:
         ),
     ]
     final = results.scenario.longterm.years
-    return hv.Overlay(layers).opts(
-        title=f"Settlement at the invert: {total[-1]:.3g} mm after {final:g} years",
+    return hv.Overlay([*behind, *layers, *over]).opts(
+        title=f"Train-induced settlement at the invert: {total[-1]:.3g} mm after {final:g} years",
         logx=True,
         **_LEGEND,
         **PLOT_OPTIONS,

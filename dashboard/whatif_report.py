@@ -14,6 +14,7 @@ import panel as pn
 from dashboard import plots
 from dashboard.report import REPORT_TITLE, report_header, standalone_html
 from dashboard.whatif import CURRENT_LABEL, WhatIfSession, load_session
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.pipeline import Results, StageCache, run
 
 COMPARISON_CSS = """
@@ -49,7 +50,8 @@ def build_session_report(session: WhatIfSession, current: Results | None) -> pn.
         + (" and with the current run" if current is not None else "")
         + f". Differences are taken to <b>{html.escape(session.reference)}</b>. Displacements "
         "are positive downward.</p><h3>Comparison</h3>"
-        + comparison_html(session.comparison(current)),
+        + comparison_html(session.comparison(current))
+        + f"<p>The long-term settlement is {html.escape(SETTLEMENT_COVERS)}.</p>",
         stylesheets=[COMPARISON_CSS],
         sizing_mode="stretch_width",
     )

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from model.commands import MODEL_SUBCOMMANDS, subcommand_help
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import Scenario
 from model.params.borehole import load_borehole_csv
 from model.pipeline import STAGES, Results, SimulationError, run
@@ -255,6 +256,7 @@ def write_results(results: Results, out: Path) -> list[Path]:
     summary_path = out / "summary.json"
     summary = {
         "summary": results.summary(),
+        "settlement_covers": SETTLEMENT_COVERS,
         "longterm_law": lt.statement,
         "longterm_pore_pressure": lt.pore_pressure_statement,
         "warnings": results.warnings,
@@ -307,7 +309,8 @@ def run_main(
             f"peak displacement at the invert {summary['peak_disp_invert_m'] * 1e3:.2f} mm, "
             f"at {COMPARISON_DEPTH_M:g} m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
             "long-term settlement after "
-            f"{scenario.longterm.years:g} years {summary['longterm_settlement_m'] * 1e3:.2f} mm; "
+            f"{scenario.longterm.years:g} years {summary['longterm_settlement_m'] * 1e3:.2f} mm "
+            f"({SETTLEMENT_COVERS}); "
             f"{len(paths)} files in {args.out}"
         )
     return 0

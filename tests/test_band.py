@@ -1,5 +1,6 @@
 """Settlement bands (model.study.band): order, zero width, spread, the covariance draw, refusals."""
 
+import json
 import math
 
 import numpy as np
@@ -7,6 +8,7 @@ import pandas as pd
 import pytest
 
 import model
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.pipeline import run
 from model.study import band as band_module
 from model.study.band import (
@@ -190,7 +192,10 @@ def test_command_line_writes_the_band_and_refuses_bad_input(tmp_path, client, ca
     assert code == 0
     table = pd.read_csv(out / "band.csv")
     assert list(table.columns[:5]) == ["years", "p05", "p50", "p95", "mean"]
-    assert "band of 4 of 4 draws (2 seeds)" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "band of 4 of 4 draws (2 seeds)" in printed and f"({SETTLEMENT_COVERS})" in printed
+    definition = json.loads((out / "band.json").read_text())
+    assert definition["settlement_covers"] == SETTLEMENT_COVERS  # issue 25: what it covers
     for argv, message in (
         (["--law-cv", "a"], "--law-cv 'a' must be of the form name=cv"),
         (["--site-cv", "3:cu_ratio=0.1"], "layer 3 is outside the allowed range [0, 0]"),

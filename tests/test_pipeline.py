@@ -13,6 +13,7 @@ import pytest
 
 from model import pipeline
 from model.cli import main
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import Numerics, Scenario, ScenarioError
 from model.pipeline import StageCache, run
 
@@ -309,7 +310,8 @@ CHEAP_SET = [
 
 def test_cli_writes_readable_files(tmp_path, capsys):
     assert main([*CHEAP_SET, "--out", str(tmp_path)]) == 0
-    assert "peak invert force" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "peak invert force" in printed and f"({SETTLEMENT_COVERS})" in printed
     profile = np.loadtxt(tmp_path / "depth_profile.csv", delimiter=",", skiprows=1)
     assert profile.shape == (11, 2)
     header = (tmp_path / "time_histories.csv").read_text().splitlines()[0].split(",")
@@ -320,6 +322,7 @@ def test_cli_writes_readable_files(tmp_path, capsys):
     assert scenario.train.speed_kmh == 100.0
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["summary"]["peak_disp_invert_m"] == pytest.approx(profile[0, 1], rel=1e-6)
+    assert summary["settlement_covers"] == SETTLEMENT_COVERS  # issue 25: what it covers
 
 
 @pytest.mark.parametrize(

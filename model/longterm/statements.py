@@ -12,6 +12,11 @@ from model.longterm.pore_pressure import PORE_PRESSURE_LAWS
 from model.longterm.strain_laws import LAW_NAMES
 from model.params.site import SECONDS_PER_YEAR, Layer
 
+SETTLEMENT_COVERS = (
+    "train-induced: cyclic plastic strain and consolidation of train-induced pore pressure; "
+    "not construction, leakage or regional subsidence"
+)
+"""What every long-term settlement of this program covers, said wherever one is shown."""
 UNIT_WEIGHT_TOLERANCE = 0.10  # host layer γ against s.soil's ρ g (docs/model.md §14)
 POWER_CONSTANTS = ("a_u", "b_u", "m_u", "r_u_max")
 HYPERBOLIC_CONSTANTS = ("alpha_u", "beta_u", "m_u", "r_u_max")

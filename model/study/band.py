@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import Scenario
 from model.study.execution import SCHEDULER_ENV, collect_tasks, run_in_worker, study_client
 
@@ -345,8 +346,8 @@ def settlement_band(
         ``mean`` (m, over the draws that ran) and one column per draw, ``draw_0000`` … (m; empty
         where the draw failed). ``attrs``: ``n_draws`` (draws that ran), ``n_requested``,
         ``errors`` ({draw: message}), ``draws`` (each draw's seed and drawn values), ``seeds``,
-        ``sampling_seed``, ``law_cv``, ``site_cv``, ``calibrated_layers``, ``cancelled`` and
-        ``scenario`` (the base's JSON).
+        ``sampling_seed``, ``law_cv``, ``site_cv``, ``calibrated_layers``, ``cancelled``,
+        ``scenario`` (the base's JSON) and ``settlement_covers`` (what the settlement covers).
 
     Raises
     ------
@@ -405,6 +406,7 @@ def settlement_band(
         calibrated_layers=[] if calibration is None else calibrated_layers(scenario, calibration),
         cancelled=cancelled,
         scenario=scenario_json,
+        settlement_covers=SETTLEMENT_COVERS,
     )
     return table
 
@@ -590,7 +592,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m model band") 
             f"band of {table.attrs['n_draws']} of {table.attrs['n_requested']} draws "
             f"({len(table.attrs['seeds'])} seeds): settlement after {final['years']:g} years "
             f"p05 {final['p05'] * 1e3:.3g} mm, p50 {final['p50'] * 1e3:.3g} mm, "
-            f"p95 {final['p95'] * 1e3:.3g} mm; {', '.join(str(p) for p in paths)}",
+            f"p95 {final['p95'] * 1e3:.3g} mm ({SETTLEMENT_COVERS}); "
+            f"{', '.join(str(p) for p in paths)}",
             file=sys.stderr if cancelled else sys.stdout,
         )
     return 130 if cancelled else 0
