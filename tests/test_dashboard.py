@@ -29,6 +29,7 @@ from dashboard.inputs import HIDDEN, PRIMARY, SWITCHES
 from dashboard.longterm_view import LONGTERM_PLOTS
 from dashboard.report import package_version, report_html
 from model import scenarios
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
 from model.pipeline import STAGES, StageCache, run
 
@@ -652,9 +653,11 @@ def test_report_is_self_contained_and_complete(results):
         "Invert line-load PSD",
         "Interface displacement PSD",
         "Peak dynamic displacement against depth",
+        "Train-induced settlement at the invert",
     ):
         assert title in text, title
     shown = "".join(_markup_texts(text))
+    assert SETTLEMENT_COVERS in shown  # issue 25: what the long-term settlement covers
     for item in plots.summary_items(results):
         assert f'data-key="{item.key}">{item.text}<' in shown
     assert html.escape(results.scenario_json) in shown  # the full scenario, as <pre> text
