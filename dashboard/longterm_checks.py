@@ -44,9 +44,14 @@ DEFAULT_DASHBOARD_DRAWS = 20
 MAX_SEEDS = 50
 
 
+def counted(n: int, noun: str) -> str:
+    """ "1 draw", "3 draws"."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def band_label(table: pd.DataFrame) -> str:
     """Legend entry of a band's shaded area, with the number of draws that made it."""
-    return f"band of {table.attrs['n_draws']} draws: p05–p95"
+    return f"band of {counted(table.attrs['n_draws'], 'draw')}: p05–p95"
 
 
 def band_layers(table: pd.DataFrame | None) -> list[hv.Element]:
@@ -65,7 +70,7 @@ def band_layers(table: pd.DataFrame | None) -> list[hv.Element]:
             (table["years"], table["p50"] * MM),
             kdims=[YEARS],
             vdims=[SETTLEMENT],
-            label=f"p50 of {n_draws} draws",
+            label=f"p50 of {counted(n_draws, 'draw')}",
         ).opts(color=BAND_COLOUR, line_dash="dashed", line_width=1.5, framewise=True),
     ]
 
@@ -122,11 +127,11 @@ def band_statement(table: pd.DataFrame) -> str:
     final = table.iloc[-1]
     attrs = table.attrs
     failed = attrs["n_requested"] - attrs["n_draws"]
-    notes = [f"{failed} draws failed" if failed and not attrs["cancelled"] else ""]
+    notes = [f"{counted(failed, 'draw')} failed" if failed and not attrs["cancelled"] else ""]
     notes.append("cancelled: the draws done so far" if attrs["cancelled"] else "")
     note = "".join(f" ({text})" for text in notes if text)
     return (
-        f"**Settlement band of {attrs['n_draws']} of {attrs['n_requested']} draws** "
+        f"**Settlement band of {attrs['n_draws']} of {counted(attrs['n_requested'], 'draw')}** "
         f"({len(attrs['seeds'])} irregularity seeds){note}: after {final['years']:g} years "
         f"p05 {final['p05'] * MM:.3g} mm, p50 {final['p50'] * MM:.3g} mm, "
         f"p95 {final['p95'] * MM:.3g} mm."
@@ -201,11 +206,15 @@ class SettlementBandPanel(pn.viewable.Viewer):
         super().__init__(**params)
         self._changed = changed
         self.draws = pn.widgets.IntInput(
-            label="Draws", value=DEFAULT_DASHBOARD_DRAWS, start=1, end=DASHBOARD_MAX_DRAWS
+            label="Draws",
+            value=DEFAULT_DASHBOARD_DRAWS,
+            start=1,
+            end=DASHBOARD_MAX_DRAWS,
+            css_classes=["band-draws"],
         )
         self.seeds = pn.widgets.IntInput(
             label="Irregularity seeds", value=min(DEFAULT_SEEDS, DEFAULT_DASHBOARD_DRAWS), start=1,
-            end=MAX_SEEDS,
+            end=MAX_SEEDS, css_classes=["band-seeds"],
         )  # fmt: skip
         self.cv_a = pn.widgets.FloatInput(
             label="CV of the strain-law coefficient a (-)", value=0.0, start=0.0, end=MAX_CV,
@@ -276,7 +285,7 @@ class SettlementBandPanel(pn.viewable.Viewer):
             else ""
         )
         self.plan.object = (
-            f"**{n_draws} draws** over {passages} passages: {took} on "
+            f"**{counted(n_draws, 'draw')}** over {counted(passages, 'passage')}: {took} on "
             f"{min(machine_workers(), passages)} workers (estimate; plus a few seconds of "
             f"cluster start-up){repeat}"
         )
@@ -298,8 +307,8 @@ class SettlementBandPanel(pn.viewable.Viewer):
                 n_draws = self.table.attrs["n_draws"]
                 self.table, dropped = None, True
                 self.status.object = (
-                    f"**Band of {n_draws} draws dropped:** the inputs changed since it was "
-                    "computed; press Start for a band of the new inputs."
+                    f"**Band of {counted(n_draws, 'draw')} dropped:** the inputs changed since "
+                    "it was computed; press Start for a band of the new inputs."
                 )
         if new_inputs:
             self.update_plan()
@@ -320,7 +329,9 @@ class SettlementBandPanel(pn.viewable.Viewer):
             self.table = None
             self._changed()
         self.progress.param.update(value=0, max=tasks, visible=True)
-        self.status.object = f"Starting {n_draws} draws (cluster start-up takes a few seconds)…"
+        self.status.object = (
+            f"Starting {counted(n_draws, 'draw')} (cluster start-up takes a few seconds)…"
+        )
         self.running = True
         self.start_button.disabled, self.cancel_button.disabled = True, False
         self._loop.remember()
