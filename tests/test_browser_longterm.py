@@ -55,9 +55,9 @@ def test_the_band_and_the_smooth_rail_of_the_long_term_tab(tmp_path):
                 timeout=RUN_WAIT_MS,
             )
             page.get_by_role("button", name="Compare with a smooth rail").click()
-            statement = page.locator(".longterm-statement", has_text="irregular/smooth = ")
-            statement.wait_for(timeout=RUN_WAIT_MS)
-            assert "on a smooth rail (irregularity.enabled = False" in statement.inner_text()
+            share = page.locator(".longterm-statement p", has_text="irregular/smooth = ")
+            share.wait_for(timeout=RUN_WAIT_MS)
+            assert "on a smooth rail (irregularity.enabled = False" in share.inner_text()
             page.wait_for_function(
                 f"() => ({LEGEND_JS})().some(label => label.startsWith('smooth rail: '))",
                 timeout=RUN_WAIT_MS,
