@@ -65,7 +65,7 @@ def band_layers(table: pd.DataFrame | None) -> list[hv.Element]:
             kdims=[YEARS],
             vdims=[SETTLEMENT, "base"],
             label=band_label(table),
-        ).opts(color=BAND_COLOUR, alpha=0.25, line_alpha=0, framewise=True),
+        ).opts(color=BAND_COLOUR, alpha=0.35, line_color=BAND_COLOUR, line_width=1, framewise=True),
         hv.Curve(
             (table["years"], table["p50"] * MM),
             kdims=[YEARS],
@@ -207,6 +207,7 @@ class SettlementBandPanel(pn.viewable.Viewer):
         self._changed = changed
         self.draws = pn.widgets.IntInput(
             label="Draws",
+            width=150,
             value=DEFAULT_DASHBOARD_DRAWS,
             start=1,
             end=DASHBOARD_MAX_DRAWS,
@@ -214,7 +215,7 @@ class SettlementBandPanel(pn.viewable.Viewer):
         )
         self.seeds = pn.widgets.IntInput(
             label="Irregularity seeds", value=min(DEFAULT_SEEDS, DEFAULT_DASHBOARD_DRAWS), start=1,
-            end=MAX_SEEDS, css_classes=["band-seeds"],
+            end=MAX_SEEDS, width=150, css_classes=["band-seeds"],
         )  # fmt: skip
         self.cv_a = pn.widgets.FloatInput(
             label="CV of the strain-law coefficient a (-)", value=0.0, start=0.0, end=MAX_CV,

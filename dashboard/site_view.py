@@ -64,7 +64,8 @@ def _layer_labels(results: Results, x: float) -> hv.Labels:
 def settlement_components_plot(results: Results, behind=(), over=()) -> hv.Overlay:
     """Settlement at the invert against years of service (log axis), stacked: the plastic part
     S_p, the consolidation part S_c on top of it, and the total S = S_p + S_c; the elements
-    ``behind`` drawn under them and ``over`` on top (the long-term tab's band and smooth rail,
+    ``behind`` drawn behind the total's line (over the parts, which would hide them) and
+    ``over`` on top of it (the long-term tab's band and smooth rail,
     :mod:`dashboard.longterm_checks`)."""
     lt = results.longterm
     plastic = lt.plastic_settlement_m * MM
@@ -87,8 +88,9 @@ def settlement_components_plot(results: Results, behind=(), over=()) -> hv.Overl
         ),
     ]
     final = results.scenario.longterm.years
-    return hv.Overlay([*behind, *layers, *over]).opts(
-        title=f"Train-induced settlement at the invert: {total[-1]:.3g} mm after {final:g} years",
+    parts, total_line = layers[:2], layers[2]
+    return hv.Overlay([*parts, *behind, total_line, *over]).opts(
+        title=f"Train-induced settlement: {total[-1]:.3g} mm after {final:g} years",
         logx=True,
         **_LEGEND,
         **PLOT_OPTIONS,

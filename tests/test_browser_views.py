@@ -38,7 +38,7 @@ pytestmark = [
 ]
 
 LONGTERM_TITLES = (  # beginnings of the titles (the settlement's states its value)
-    "Train-induced settlement at the invert",
+    "Train-induced settlement: ",
     "Permanent strain after 20 years",
     "Dynamic deviator over static strength",
 )

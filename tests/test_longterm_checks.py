@@ -63,7 +63,7 @@ def test_every_long_term_result_says_what_it_covers(results):
     assert SETTLEMENT_COVERS.startswith("train-induced: cyclic plastic strain")
     assert f"**What it covers:** {SETTLEMENT_COVERS}." in law_statement(results)
     title = hv.Store.lookup_options("bokeh", checks.settlement_plot(results), "plot").kwargs
-    assert title["title"].startswith("Train-induced settlement at the invert: ")
+    assert title["title"].startswith("Train-induced settlement: ")
     header = build_session_report(WhatIfSession(), results).objects[0].object
     assert SETTLEMENT_COVERS in header  # the what-if report compares long-term settlements
 
@@ -85,7 +85,13 @@ def test_the_band_drawn_is_model_settlement_band_s_with_its_draw_count(view, res
     for values, column in ((area.dimension_values(1), "p95"), (area.dimension_values(2), "p05")):
         np.testing.assert_allclose(values, expected[column] * 1e3, rtol=1e-12, atol=0.0)
     np.testing.assert_allclose(p50.dimension_values(1), expected["p50"] * 1e3, rtol=1e-12)
-    assert overlay.values()[0] is area  # behind the stacked parts and the total
+    assert [element.label for element in overlay] == [  # behind the total, over the parts
+        "plastic S_p",
+        "consolidation S_c",
+        "band of 3 draws: p05–p95",
+        "p50 of 3 draws",
+        "total S",
+    ]
     assert band.status.object.startswith("**Settlement band of 3 of 3 draws** (2 irregularity")
     hv.render(overlay, backend="bokeh")
 
