@@ -219,7 +219,7 @@ class SettlementBandPanel(pn.viewable.Viewer):
         )  # fmt: skip
         self.cv_a = pn.widgets.FloatInput(
             label="CV of the strain-law coefficient a (-)", value=0.0, start=0.0, end=MAX_CV,
-            step=0.05,
+            step=0.05, css_classes=["band-cv"],
         )  # fmt: skip
         self.plan = pn.pane.Markdown("", sizing_mode="stretch_width", css_classes=["band-plan"])
         """How many draws Start computes and about how long they take."""
