@@ -13,6 +13,7 @@ from dashboard import plots
 from dashboard.report import REPORT_TITLE, report_header, standalone_html
 from dashboard.study_plots import RESULTS, display_values, study_plots
 from dashboard.whatif_report import COMPARISON_CSS
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import display_label
 from model.scenarios import matching_preset
 from model.study.definition import Study
@@ -115,12 +116,17 @@ def build_study_report(table: pd.DataFrame, name: str | None = None) -> pn.Colum
         Name of the base scenario in the header; default its preset's name, or "custom".
     """
     study = Study.from_json(table.attrs["study"])
+    covers = (
+        f"<p>The long-term settlement is {html.escape(SETTLEMENT_COVERS)}.</p>"
+        if "longterm_settlement_m" in table
+        else ""
+    )
     header = pn.pane.HTML(
         f"<h1>{REPORT_TITLE}: study</h1>"
         + report_header(name or matching_preset(study.base))
         + "<p>The base scenario run over the varied inputs times the irregularity seeds; per "
         "point, the mean and the 5–95 % band across the seeds. Displacements are positive "
-        "downward.</p>" + study_definition_html(table),
+        "downward.</p>" + covers + study_definition_html(table),
         sizing_mode="stretch_width",
     )
     figures = pn.GridBox(

@@ -24,6 +24,7 @@ from dashboard.export import main as export_main
 from dashboard.study_plots import RESULTS, band_plot, heat_map, study_bands, study_plots
 from dashboard.study_report import study_band_table, study_report_html
 from dashboard.study_view import NONE, StudyView, grid_values, study_parameters
+from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import Scenario
 from model.study import execution
 from model.study.definition import define_study
@@ -309,6 +310,7 @@ def test_study_report_is_offline_and_holds_definition_plots_and_bands(study_tabl
     assert "<li>Soil Young's modulus (MPa): 5, 10</li>" in shown
     assert "Irregularity seeds: 7, 8." in shown
     assert "Runs: 4 in the study; 4 finished, 0 failed, 0 cancelled." in shown
+    assert f"The long-term settlement is {SETTLEMENT_COVERS}." in shown  # issue 25
 
     keys = ["peak_disp_invert_m", "peak_disp_11m_m", "peak_disp_deepest_m"]
     keys.append("longterm_settlement_m")
