@@ -260,14 +260,24 @@ class SettlementBandPanel(pn.viewable.Viewer):
         """The CVs of the law constants drawn (none at 0)."""
         return {"a": float(self.cv_a.value)} if self.cv_a.value else None
 
+    def counts(self) -> tuple[int, int]:
+        """The draws and seeds asked for (ValueError for an empty box)."""
+        for widget in (self.draws, self.seeds):
+            if widget.value is None:
+                raise ValueError(
+                    f"{widget.label} is empty: give a whole number from {widget.start} to "
+                    f"{widget.end}"
+                )
+        return int(self.draws.value), int(self.seeds.value)
+
     def update_plan(self) -> None:
         """Say how many draws Start computes and about how long, before it is pressed."""
         if self._results is None:
             self.plan.object = "A band needs results on screen first."
             return
         scenario = self._results.scenario
-        n_draws, n_seeds = int(self.draws.value), int(self.seeds.value)
         try:
+            n_draws, n_seeds = self.counts()
             if self._draw_seconds is None:
                 self._draw_seconds = longterm_stage_seconds(self._results)
             seconds = band_seconds(scenario, n_draws, n_seeds, self._draw_seconds)
@@ -322,8 +332,12 @@ class SettlementBandPanel(pn.viewable.Viewer):
         """Start a band of the results on screen (nothing while one runs)."""
         if self.running or self._results is None:
             return
+        try:
+            n_draws, n_seeds = self.counts()
+        except ValueError as error:
+            self.status.object = f"**Not started:** {error}"
+            return
         base, self._base_json = self._results.scenario, self._results.scenario_json
-        n_draws, n_seeds = int(self.draws.value), int(self.seeds.value)
         tasks = len(band_seeds(base, min(n_seeds, n_draws)))
         self._cancel.clear()
         if self.table is not None:

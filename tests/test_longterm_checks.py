@@ -172,3 +172,12 @@ def test_a_smooth_rail_already_is_said_not_run(cheap_scenario, cache):
     tab.smooth_rail.button.clicks += 1
     assert tab.smooth_rail.smooth is None
     assert "smooth already" in tab.smooth_rail.status.object
+
+
+def test_an_empty_count_is_refused_with_its_range(view):
+    view.band.draws.value = None
+    expected = "Cannot start: Draws is empty: give a whole number from 1 to 1000"
+    assert view.band.plan.object == expected
+    view.band.start_button.clicks += 1
+    assert view.band.status.object.startswith("**Not started:** Draws is empty")
+    assert not view.band.running and view.band.table is None
