@@ -132,15 +132,15 @@ def band_statement(table: pd.DataFrame) -> str:
     note = "".join(f" ({text})" for text in notes if text)
     return (
         f"**Settlement band of {attrs['n_draws']} of {counted(attrs['n_requested'], 'draw')}** "
-        f"({len(attrs['seeds'])} irregularity seeds){note}: after {final['years']:g} years "
-        f"p05 {final['p05'] * MM:.3g} mm, p50 {final['p50'] * MM:.3g} mm, "
+        f"({counted(len(attrs['seeds']), 'irregularity seed')}){note}: after "
+        f"{final['years']:g} years p05 {final['p05'] * MM:.3g} mm, p50 {final['p50'] * MM:.3g} mm, "
         f"p95 {final['p95'] * MM:.3g} mm."
     )
 
 
 def longterm_stage_seconds(results: Results) -> float:
     """Time of the results' long-term stage (s): as the run measured it, or timed here once
-    when the stage came from the cache (about 0.06 s on the paper case)."""
+    when the stage came from the cache (milliseconds: docs/longterm.md, Cost)."""
     seconds = results.stage_seconds.get("longterm", 0.0)
     if seconds > 0.0:
         return seconds
