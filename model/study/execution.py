@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import multiprocessing
 import os
 import re
 import threading
@@ -18,6 +19,7 @@ import uuid
 from collections.abc import Callable, Iterable
 from typing import Any
 
+import dask
 import numba
 import pandas as pd
 
@@ -134,6 +136,7 @@ def study_client(
             yield client
         return
     with (
+        dask.config.set({"distributed.worker.multiprocessing-method": worker_start_method()}),
         LocalCluster(
             n_workers=n_workers or machine_workers(),
             threads_per_worker=1,
@@ -144,6 +147,19 @@ def study_client(
         Client(cluster, set_as_default=False) as client,
     ):
         yield client
+
+
+def worker_start_method() -> str:
+    """How the LocalCluster starts its worker processes: ``"fork"`` where the platform has it.
+
+    A forked worker starts with this process's imported modules and loaded Numba kernels, in
+    a few milliseconds, where a spawned one imports Python, Dask and the model afresh and loads
+    every kernel from the disk cache (seconds, on every worker, before its first run). A forked
+    worker runs the serial compilation of the one parallel kernel (one Numba thread,
+    :func:`run_in_worker`), so it never enters the OpenMP threads this process may have
+    started. ``"spawn"`` elsewhere (macOS, Windows: Python's default there).
+    """
+    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
 
 
 def run_study(
