@@ -43,6 +43,7 @@ The 2D static response is infinite for n = 1 (it grows like ln 1/ω), so f = 0 i
 from __future__ import annotations
 
 import cmath
+import os
 import types
 from dataclasses import dataclass
 
@@ -271,10 +272,12 @@ def _compiled_as(function, name: str):
 
 
 # The kernel compiled twice from one source: across the frequencies on Numba's threads, and in
-# one thread (``prange`` is then ``range``, the same arithmetic in the same order). The serial
-# one runs whenever Numba has one thread: a study worker, which may be a process forked from a
-# dashboard that already started the OpenMP threads of the parallel one (GNU OpenMP cannot be
-# used again after a fork), and where the thread pool would only add its overhead.
+# one thread (``prange`` is then ``range``, the same arithmetic in the same order: the results
+# are identical). The serial one runs where Numba has one thread (a study worker: the thread
+# pool would only add its overhead) and in any process forked after this module was imported
+# (a study worker forked from a dashboard): the parent may have started the OpenMP threads of
+# the parallel one, and GNU OpenMP terminates a forked child that uses them again.
+_IMPORTING_PROCESS = os.getpid()
 ring_soil_field_kernel = numba.njit(cache=True, parallel=True, nogil=True)(_ring_soil_field)
 ring_soil_field_serial = numba.njit(cache=True, nogil=True)(
     _compiled_as(_ring_soil_field, "ring_soil_field_serial")
@@ -326,7 +329,8 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
     """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
-    kernel = ring_soil_field_kernel if numba.get_num_threads() > 1 else ring_soil_field_serial
+    serial = numba.get_num_threads() == 1 or os.getpid() != _IMPORTING_PROCESS
+    kernel = ring_soil_field_serial if serial else ring_soil_field_kernel
     fields = kernel(
         omega,
         radius,
