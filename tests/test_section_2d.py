@@ -1,8 +1,10 @@
 """Ring in an elastic full-space (model.soil.section_2d): closed forms, field equations, an
 independent finite-element model, passivity, convergence and input errors."""
 
+import multiprocessing
 from types import SimpleNamespace
 
+import numba
 import numpy as np
 import param
 import pytest
@@ -18,6 +20,8 @@ from model.soil.section_2d import (
     invert_receptance,
     ring_displacement,
     ring_displacement_harmonics,
+    ring_soil_field_kernel,
+    ring_soil_field_serial,
     soil_field,
 )
 
@@ -548,3 +552,48 @@ def test_bad_input_is_refused_with_a_message_naming_it(call, message):
 def test_soil_parameters_out_of_physical_range_are_refused_at_assignment(name, value):
     with pytest.raises(ValueError, match=rf"{name} = {value!r} is outside the allowed range"):
         Soil(**{name: value})
+
+
+# ---- the two compilations of the kernel --------------------------------------------------
+def _receptance_case():
+    """Paper section on a small grid: 60 frequencies to 100 Hz, 5 depths to 35 m."""
+    scenario = Scenario.paper()
+    return np.linspace(0.05, 100.0, 60), np.linspace(0.0, 35.0, 5), scenario.tunnel, scenario.soil
+
+
+def _receptance_in_child(queue) -> None:
+    """invert_receptance in a forked process (put on ``queue``)."""
+    queue.put(invert_receptance(*_receptance_case(), 32))
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="one Numba thread: no parallel run")
+def test_serial_compilation_gives_the_parallel_numbers_bit_for_bit():
+    """One Numba thread (a study worker) runs ring_soil_field_serial, several the parallel
+    kernel: two compilations of one source, the same receptance to the last bit."""
+    parallel = invert_receptance(*_receptance_case(), 32)
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        serial = invert_receptance(*_receptance_case(), 32)
+    finally:
+        numba.set_num_threads(before)
+    np.testing.assert_array_equal(serial, parallel)
+    assert ring_soil_field_serial.signatures and ring_soil_field_kernel.signatures
+
+
+@pytest.mark.skipif(
+    "fork" not in multiprocessing.get_all_start_methods() or numba.config.NUMBA_NUM_THREADS < 2,
+    reason="needs fork and a parallel run in this process",
+)
+def test_a_process_forked_after_a_parallel_run_computes_the_same_receptance():
+    """After this process ran the parallel kernel (OpenMP threads started), a forked child (a
+    study worker) runs the serial compilation: GNU OpenMP would terminate it otherwise."""
+    expected = invert_receptance(*_receptance_case(), 32)
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_receptance_in_child, args=(queue,))
+    child.start()
+    received = queue.get(timeout=60)
+    child.join(timeout=30)
+    assert child.exitcode == 0
+    np.testing.assert_array_equal(received, expected)

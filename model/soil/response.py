@@ -65,6 +65,10 @@ TAIL_TRANSIT_TIMES = 2.0
 COMPARISON_DEPTH_M = 11.0
 # Kernel samples in each interpolation stencil between them (module docstring: kernel sampling).
 KERNEL_STENCIL = 6
+# Rows of histories per inverse FFT call (RecordGrid.time_histories); any count gives the same
+# numbers (each row is transformed alone); 16 is faster than all rows at once on the paper case
+# (benchmarks/bench_pipeline.py, docs/tunnel_soil.md).
+INVERSE_FFT_ROWS = 16
 
 
 def response_tail(max_depth_m: float, s_wave_speed_m_s: float) -> float:
@@ -222,10 +226,19 @@ class RecordGrid:
 
     def time_histories(self, spectra: np.ndarray) -> np.ndarray:
         """(n_rows, n_out) histories x(t) = ∫ X(f) e^{i2πft} df of (n_rows, nk) spectra."""
-        padded = np.zeros((spectra.shape[0], self.n_out_pad // 2 + 1), dtype=complex)
-        padded[:, : self.f_hz.size] = spectra
+        n_rows, n_freq = spectra.shape[0], self.f_hz.size
+        histories = np.empty((n_rows, self.n_out))
+        # A block of rows at a time: one zero-padded buffer that stays in the processor's
+        # cache, where all rows at once would allocate and fill (rows × n_out_pad) anew.
+        padded = np.zeros((min(n_rows, INVERSE_FFT_ROWS), self.n_out_pad // 2 + 1), dtype=complex)
+        for first in range(0, n_rows, INVERSE_FFT_ROWS):
+            block = spectra[first : first + INVERSE_FFT_ROWS]
+            padded[: block.shape[0], :n_freq] = block
+            inverse = scipy.fft.irfft(padded[: block.shape[0]], self.n_out_pad, axis=1)
+            histories[first : first + block.shape[0]] = inverse[:, : self.n_out]
         # Δf · n_out_pad = 1/dt_out turns the inverse DFT into samples of the integral.
-        return scipy.fft.irfft(padded, self.n_out_pad, axis=1)[:, : self.n_out] / self.dt_out
+        histories /= self.dt_out
+        return histories
 
 
 def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float) -> RecordGrid:

@@ -43,6 +43,8 @@ The 2D static response is infinite for n = 1 (it grows like ln 1/ω), so f = 0 i
 from __future__ import annotations
 
 import cmath
+import os
+import types
 from dataclasses import dataclass
 
 import numba
@@ -121,8 +123,7 @@ def _stress_difference_terms(n, r, alpha, beta, delta_p, delta_s, shear, lame):
     return diff_p, diff_sum
 
 
-@numba.njit(cache=True, parallel=True, nogil=True)
-def ring_soil_field_kernel(
+def _ring_soil_field(
     omega,
     radius,
     cos_weight,
@@ -199,8 +200,13 @@ def ring_soil_field_kernel(
             det = m00 * m11 - m01 * m10
             amp_p[n] = m11 / det  # right-hand side (1, 0): unit radial traction
             amp_sum[n] = -m10 / det
-        inv_ratio_p_a = 1.0 / ratio_p_a  # so the inner loop multiplies instead of dividing
-        inv_ratio_s_a = 1.0 / ratio_s_a
+        # Reciprocals, so the inner loop multiplies instead of dividing; an explicit loop, not
+        # 1.0 / array, whose parallel compilation rounds differently from the serial one
+        inv_ratio_p_a = np.empty(n_max + 1, np.complex128)
+        inv_ratio_s_a = np.empty(n_max + 1, np.complex128)
+        for n in range(n_max + 1):
+            inv_ratio_p_a[n] = 1.0 / ratio_p_a[n]
+            inv_ratio_s_a[n] = 1.0 / ratio_s_a[n]
         for j in range(n_points):
             r = radius[j]
             # e_P = K_n(αr)/K_n(αa) and R_n(αr) = K_{n+1}/K_n, advanced in n below (e_S alike)
@@ -254,6 +260,30 @@ def ring_soil_field_kernel(
     return u_r, u_t, s_rr, s_tt, s_rt
 
 
+def _compiled_as(function, name: str):
+    """``function`` under another name, so that Numba caches a second compilation of it apart
+    (its cache files are named after the function's qualified name)."""
+    renamed = types.FunctionType(
+        function.__code__, function.__globals__, name, function.__defaults__
+    )
+    renamed.__qualname__ = renamed.__name__ = name
+    renamed.__doc__ = function.__doc__
+    return renamed
+
+
+# The kernel compiled twice from one source: across the frequencies on Numba's threads, and in
+# one thread (``prange`` is then ``range``, the same arithmetic in the same order: the results
+# are identical). The serial one runs where Numba has one thread (a study worker: the thread
+# pool would only add its overhead) and in any process forked after this module was imported
+# (a study worker forked from a dashboard): the parent may have started the OpenMP threads of
+# the parallel one, and GNU OpenMP terminates a forked child that uses them again.
+_IMPORTING_PROCESS = os.getpid()
+ring_soil_field_kernel = numba.njit(cache=True, parallel=True, nogil=True)(_ring_soil_field)
+ring_soil_field_serial = numba.njit(cache=True, nogil=True)(
+    _compiled_as(_ring_soil_field, "ring_soil_field_serial")
+)
+
+
 # ---- public wrappers --------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SoilField:
@@ -299,7 +329,9 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
     """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
-    fields = ring_soil_field_kernel(
+    serial = numba.get_num_threads() == 1 or os.getpid() != _IMPORTING_PROCESS
+    kernel = ring_soil_field_serial if serial else ring_soil_field_kernel
+    fields = kernel(
         omega,
         radius,
         np.ascontiguousarray(cos_weight),
