@@ -31,8 +31,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from model.outputs import check_output_folder, replacing_folder, write_text_atomic
 from model.params import Scenario
-from model.study.execution import SCHEDULER_ENV, collect_tasks, run_in_worker, study_client
+from model.study.execution import collect_tasks, run_in_worker, study_client
 
 LAW_CONSTANTS = ("a", "b", "m", "n", "a_u", "b_u", "m_u", "alpha_u", "beta_u")
 """Layer constants of the strain and pore-pressure laws that ``law_cv`` may vary."""
@@ -426,16 +427,19 @@ def _band_table(years, settlement: list, ran: list[int]) -> pd.DataFrame:
 
 # ---- files and the command line ------------------------------------------------------------
 def save_band(table: pd.DataFrame, out: str | Path) -> list[Path]:
-    """Write ``band.csv`` (the table, floats exact) and ``band.json`` (its definition)."""
+    """Write ``band.csv`` (the table, floats exact) and ``band.json`` (its definition), each
+    whole (:func:`model.outputs.write_atomic`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    csv_path, json_path = out / "band.csv", out / "band.json"
-    table.to_csv(csv_path, index=False, float_format="%r")
     definition = {key: value for key, value in table.attrs.items() if key != "scenario"}
     definition["errors"] = {str(key): value for key, value in definition["errors"].items()}
     definition["scenario"] = json.loads(table.attrs["scenario"])
-    json_path.write_text(json.dumps(definition, indent=1, allow_nan=False) + "\n", "utf-8")
-    return [csv_path, json_path]
+    return [
+        write_text_atomic(out / "band.csv", table.to_csv(index=False, float_format="%r")),
+        write_text_atomic(
+            out / "band.json", json.dumps(definition, indent=1, allow_nan=False) + "\n"
+        ),
+    ]
 
 
 def _parse_cvs(items: Iterable[str], option: str, n_layers: int | None = None):
@@ -469,7 +473,8 @@ def _parse_cvs(items: Iterable[str], option: str, n_layers: int | None = None):
 
 def build_parser(prog: str = "python -m model band") -> argparse.ArgumentParser:
     """Argument parser of ``python -m model band``."""
-    from model.cli import add_scenario_arguments
+    from model.cli import add_output_arguments, add_scenario_arguments
+    from model.study.cli import add_cluster_arguments
 
     parser = argparse.ArgumentParser(
         prog=prog,
@@ -509,13 +514,8 @@ def build_parser(prog: str = "python -m model band") -> argparse.ArgumentParser:
         "--calibrated-layer", type=int, default=0, help="layer given the calibration (default 0)"
     )
     parser.add_argument("--sampling-seed", type=int, default=0, help="seed of the draws")
-    parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
-    parser.add_argument(
-        "--scheduler",
-        help=f"existing Dask scheduler tcp://host:port (default ${SCHEDULER_ENV}, else a "
-        "LocalCluster with one single-threaded worker per core)",
-    )
-    parser.add_argument("--workers", type=int, help="LocalCluster workers (default: cores)")
+    add_output_arguments(parser)
+    add_cluster_arguments(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return parser
 
@@ -559,6 +559,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m model band") 
     progress = None if args.quiet else BandProgress()
     try:
         scenario = load_scenario(args)
+        check_output_folder(args.out, args.force)  # before the draws
         calibration = (
             _calibrate(scenario, args.calibration, args.calibrated_layer)
             if args.calibration
@@ -576,13 +577,14 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m model band") 
             progress=progress,
             n_workers=args.workers,
         )
+        with replacing_folder(args.out) as folder:  # an interrupted write keeps the old band
+            paths = [args.out / path.name for path in save_band(table, folder)]
     except (ValueError, KeyError, OSError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         parser.exit(2, f"error: {message}\n")
     finally:
         if progress is not None:
             progress.close()
-    paths = save_band(table, args.out)
     cancelled = table.attrs["cancelled"]
     if not args.quiet and len(table):
         final = table.iloc[-1]
