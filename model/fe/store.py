@@ -59,7 +59,7 @@ class FEResult:
     @classmethod
     def from_npz(cls, path: Path) -> FEResult:
         """Read a file written by :meth:`to_npz`."""
-        with np.load(path) as data:
+        with open(path, "rb") as file, np.load(file) as data:
             meta = json.loads(str(data["meta"]))
             arrays = {name: data[name] for name in _ARRAYS}
         return cls(**meta, **arrays)
