@@ -454,3 +454,39 @@ def test_pandas_reads_a_saved_study_bit_for_bit(saved_study):
     """The checksummed text is the file pandas reads (shortest exact floats)."""
     table = pd.read_csv(saved_study / "runs.csv", index_col="run")
     assert list(table["peak_disp_invert_m"]) == [1e-3, 2e-3]
+
+
+# ---- the run's memory estimate -------------------------------------------------------------
+@pytest.mark.parametrize("tunnel_model", ["2d", "2.5d"])
+def test_the_memory_estimate_is_not_below_the_measured_peak(cheap_scenario, tunnel_model):
+    """Before, the estimate was the largest stage's arrays, 1.5–1.9× below the peak (each
+    stage keeps its results while the next computes; the 2.5D stress field is larger). Now
+    the tracemalloc peak of a whole run is at most the estimate (an upper count of sizes)."""
+    import tracemalloc
+
+    from model.pipeline import run
+    from model.run_cost import estimate_run
+
+    scenario = cheap_scenario()
+    scenario.tunnel.model = tunnel_model
+    scenario.numerics.n_depths = 71
+    run(scenario)  # Numba caches loaded outside the measurement
+    tracemalloc.start()
+    try:
+        run(scenario)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert estimate_run(scenario).peak_memory_bytes >= peak
+
+
+def test_a_measured_profile_is_counted_in_the_memory_estimate():
+    """Before, a measured profile's size did not enter the estimate."""
+    from model.run_cost import PROFILE_BYTES_PER_LINE, estimate_run
+
+    scenario = Scenario.preset("single_bogie")
+    base = estimate_run(scenario).memory_bytes["vehicle_track"]
+    lines = "\n".join(f"{x * 0.01:.2f},0.1" for x in range(20_000))
+    scenario.irregularity.profile_data = "x_m,eta_mm\n" + lines + "\n"
+    grown = estimate_run(scenario).memory_bytes["vehicle_track"] - base
+    assert grown == PROFILE_BYTES_PER_LINE * 20_002
