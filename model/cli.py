@@ -18,15 +18,18 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tempfile
 import time
 import warnings
 from pathlib import Path
 
-import numpy as np
-
 from model.commands import MODEL_SUBCOMMANDS, subcommand_help
 from model.longterm.statements import SETTLEMENT_COVERS
+from model.outputs import (
+    check_output_folder,
+    replacing_folder,
+    write_csv_table,
+    write_text_atomic,
+)
 from model.params import Scenario
 from model.params.borehole import load_borehole_csv
 from model.pipeline import STAGES, Results, SimulationError, run
@@ -69,6 +72,23 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--out`` (a folder, new or empty) and ``--force`` (replace it): checked with
+    :func:`model.outputs.check_output_folder` before any computation, written through
+    :func:`model.outputs.replacing_folder`."""
+    parser.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="output folder (created; new or empty unless --force)",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="replace --out even if it holds files (once the new results are complete)",
+    )
+
+
 def build_parser(
     prog: str = "python -m model", with_subcommands: bool = False
 ) -> argparse.ArgumentParser:
@@ -83,12 +103,7 @@ def build_parser(
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_scenario_arguments(parser)
-    parser.add_argument(
-        "--out", type=Path, required=True, help="output folder (created; must be new or empty)"
-    )
-    parser.add_argument(
-        "--force", action="store_true", help="write into --out even if it holds files"
-    )
+    add_output_arguments(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return parser
 
@@ -135,33 +150,11 @@ class TerminalProgress:
             self.stream.write("\n")
 
 
-def prepare_output_folder(out: Path, force: bool) -> None:
-    """Create ``out`` (and its parents) and check it can be written, before any computation.
-
-    Raises
-    ------
-    ValueError
-        If ``out`` is a file, holds files and ``force`` is false, or cannot be created or
-        written; the message names ``--out``.
-    """
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out {out} is a file, not a folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise ValueError(
-            f"--out {out} already holds files; choose a new folder or pass --force to overwrite"
-        )
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
-            pass
-    except OSError as error:
-        raise ValueError(f"--out {out} cannot be written: {error.strerror or error}") from None
-
-
 def write_results(results: Results, out: Path) -> list[Path]:
     """Write time histories, spectra, the depth profile, the long-term settlement against time and
     per depth, the pore pressures against time at each depth, and (half-space ground) the
-    ground-surface levels and peaks (CSV), scenario and summary (JSON)."""
+    ground-surface levels and peaks (CSV), scenario and summary (JSON); each file written whole
+    (:func:`model.outputs.write_atomic`)."""
     out.mkdir(parents=True, exist_ok=True)
     vt, load, soil, lt = results.vehicle_track, results.load, results.soil, results.longterm
     tables = {
@@ -241,19 +234,8 @@ def write_results(results: Results, out: Path) -> list[Path]:
         }
     written = []
     for name, columns in tables.items():
-        path = out / name
-        np.savetxt(
-            path,
-            np.column_stack(list(columns.values())),
-            delimiter=",",
-            header=",".join(columns),
-            comments="",
-            fmt="%.9g",
-        )
-        written.append(path)
-    scenario_path = out / "scenario.json"
-    scenario_path.write_text(results.scenario_json + "\n", encoding="utf-8")
-    summary_path = out / "summary.json"
+        written.append(write_csv_table(out / name, columns))
+    scenario_path = write_text_atomic(out / "scenario.json", results.scenario_json + "\n")
     summary = {
         "summary": results.summary(),
         "settlement_covers": SETTLEMENT_COVERS,
@@ -262,7 +244,7 @@ def write_results(results: Results, out: Path) -> list[Path]:
         "warnings": results.warnings,
         "stage_seconds": results.stage_seconds,
     }
-    summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    summary_path = write_text_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     return [*written, scenario_path, summary_path]
 
 
@@ -284,7 +266,7 @@ def run_main(
         scenario = load_scenario(args)
         scenario.validate()
         estimate = estimate_run(scenario)
-        prepare_output_folder(args.out, args.force)
+        check_output_folder(args.out, args.force)
         if estimate.total_seconds > SLOW_RUN_SECONDS and not args.quiet:
             print(f"warning: {estimate.slow_message()}", file=sys.stderr)
         progress = None if args.quiet else TerminalProgress()
@@ -298,7 +280,9 @@ def run_main(
     except (ValueError, KeyError, OSError, SimulationError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         parser.exit(2, f"error: {message}\n")
-    paths = write_results(results, args.out)
+    with replacing_folder(args.out) as folder:  # an interrupted --force keeps the old folder
+        written = write_results(results, folder)
+    paths = [args.out / path.name for path in written]
     if not args.quiet:
         for warning in results.warnings:
             print(f"warning: {warning}", file=sys.stderr)

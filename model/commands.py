@@ -43,12 +43,11 @@ MODEL_SUBCOMMANDS = {
     "study": Subcommand("model.study.cli", "parameter sweeps and Monte-Carlo bands on Dask"),
     "fe": Subcommand("model.fe.cli", "the elastic–plastic FE check of the section (OpenSeesPy)"),
     "band": Subcommand(
-        "model.study.band", "Monte-Carlo band of the long-term settlement (p05, p50, p95)"
+        "model.study.band_cli", "Monte-Carlo band of the long-term settlement (p05, p50, p95)"
     ),
 }
-"""Subcommands of ``python -m model`` (and of ``tunnelsettle``). ``band`` is registered for
-the settlement-band module to come (``model.study.band``, with ``main(argv, prog)``): until it
-exists, the help marks it and calling it says it is not available."""
+"""Subcommands of ``python -m model`` (and of ``tunnelsettle``): each module has
+``main(argv, prog)``; one that is not installed is marked in the help and, called, says so."""
 
 
 def subcommand_help(subcommands: dict[str, Subcommand], program: str) -> str:

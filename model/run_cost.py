@@ -47,6 +47,16 @@ BESSEL_HARMONICS = 17
 # measured in one run each with other jobs on the 2-core machine.
 STRESS_COMPONENTS = 6
 STRESS_TIME_RATIO = 2.0
+# The 2.5D stress field carries more than the 2D one: its soil stage's tracemalloc peak exceeds
+# the 2D stage's by 101 B per frequency and depth (paper case: 38.9 MB at 71 depths, 109.9 MB at
+# 201, 5401 frequencies, the same with 64 harmonics), counted as this many complex fields.
+MOVING_LOAD_FIELDS = 7
+# Reading a measured profile (model.params.measured_profile.parse_profile): tracemalloc peak of
+# 136 B per line for profiles of 20 000 and 120 000 lines (text, the lists of floats, the
+# arrays), rounded up. A profile file's lines are bounded by its size over the shortest line
+# "0,0\n" (4 bytes), its size being all the estimate reads of it.
+PROFILE_BYTES_PER_LINE = 140
+SHORTEST_PROFILE_LINE = 4
 FLOAT_BYTES, COMPLEX_BYTES = 8, 16
 
 
@@ -70,8 +80,11 @@ class RunEstimate:
 
     @property
     def peak_memory_bytes(self) -> float:
-        """Largest stage memory (bytes); stages run one after the other."""
-        return max(self.memory_bytes.values())
+        """Peak memory of the run (bytes): the stages run one after the other, but each keeps
+        its results while the next one computes, and the soil stage computes the displacements
+        and the stresses together (a tracemalloc peak of 201 MB against 224 MB counted, paper
+        case; ``benchmarks/bench_run_memory.py``)."""
+        return sum(self.memory_bytes.values())
 
     def slow_message(self) -> str:
         """Warning text naming the stage and parameters that make the run slow."""
@@ -130,11 +143,14 @@ def estimate_run(scenario: Scenario, available_bytes: float | None = None) -> Ru
         synthesis = SYNTHESIS_SECONDS * n_profile * scenario.irregularity.n_components
     c0, c_modes, c_coupling, c_wheels = STEP_SECONDS
     step_seconds = c0 + c_modes * modes + c_coupling * modes * wheels + c_wheels * wheels
-    vt_memory = FLOAT_BYTES * (
-        (n_steps + 1) * (n_channels + 2)  # outputs, time and Winkler reference
-        + n_profile
-        + 4 * modes * wheels  # scratch and mode shapes at the wheels
-        + 12 * modes
+    vt_memory = PROFILE_BYTES_PER_LINE * measured_profile_lines(scenario.irregularity) + (
+        FLOAT_BYTES
+        * (
+            (n_steps + 1) * (n_channels + 2)  # outputs, time and Winkler reference
+            + n_profile
+            + 4 * modes * wheels  # scratch and mode shapes at the wheels
+            + 12 * modes
+        )
     )
 
     n_record = n_steps + 1
@@ -155,8 +171,9 @@ def estimate_run(scenario: Scenario, available_bytes: float | None = None) -> Ru
     dt_out = step * numerics.dt
     tail = response_tail(numerics.max_depth, scenario.soil.s_wave_speed)
     n_out = min(n_out_pad, math.ceil((n_record * numerics.dt + tail) / dt_out))
+    fields = 2 * STRESS_COMPONENTS + MOVING_LOAD_FIELDS * (scenario.tunnel.model == "2.5d")
     stress_memory = (
-        2 * STRESS_COMPONENTS * COMPLEX_BYTES * n_freq * depths  # transfers and spectra
+        fields * COMPLEX_BYTES * n_freq * depths  # transfers and spectra
         + (STRESS_COMPONENTS + 1) * FLOAT_BYTES * depths * n_out  # histories and deviator
         + (COMPLEX_BYTES / 2 + FLOAT_BYTES) * depths * n_out_pad  # one inverse FFT
     )
@@ -196,11 +213,28 @@ def estimate_run(scenario: Scenario, available_bytes: float | None = None) -> Ru
     limit = MEMORY_FRACTION * (
         available_memory_bytes() if available_bytes is None else available_bytes
     )
-    for stage, needed in estimate.memory_bytes.items():
+    needed = 0.0
+    for stage, bytes_ in estimate.memory_bytes.items():
+        needed += bytes_  # a stage's arrays come on top of the results before it
         if needed > limit:
             raise ValueError(
-                f"the {stage} stage would need about {needed / 1e9:.3g} GB, more than the "
-                f"{limit / 1e9:.3g} GB allowed ({MEMORY_FRACTION:.0%} of the memory available): "
+                f"the {stage} stage would need about {needed / 1e9:.3g} GB with the results "
+                f"before it, more than the {limit / 1e9:.3g} GB allowed "
+                f"({MEMORY_FRACTION:.0%} of the memory available): "
                 f"{estimate.blame[stage]}; reduce one of these"
             )
     return estimate
+
+
+def measured_profile_lines(irregularity) -> int:
+    """Lines of the measured profile (0 without one): counted in its text, or bounded by its
+    file's size (the file is not read)."""
+    if irregularity.profile_data is not None:
+        data = irregularity.profile_data
+        return data.count("\n" if isinstance(data, str) else b"\n") + 1
+    if irregularity.profile_csv:
+        try:
+            return os.stat(irregularity.profile_csv).st_size // SHORTEST_PROFILE_LINE + 1
+        except OSError:  # the run says why it cannot read it
+            return 0
+    return 0

@@ -15,9 +15,9 @@ from model.study.band import (
     calibration_draws,
     define_band,
     lognormal_factors,
-    main,
     settlement_band,
 )
+from model.study.band_cli import main
 from model.study.execution import study_client
 
 

@@ -63,7 +63,7 @@ def test_the_console_script_is_declared_in_pyproject():
     assert 'tunnelsettle = "dashboard.console:main"' in text
 
 
-@pytest.mark.parametrize("name", [n for n in ALL_SUBCOMMANDS if n != "band"])
+@pytest.mark.parametrize("name", list(ALL_SUBCOMMANDS))
 def test_each_subcommand_reaches_its_own_parser_under_its_name(name, capsys):
     with pytest.raises(SystemExit) as info:
         console.main([name, "--help"])
@@ -79,17 +79,11 @@ def test_no_or_an_unknown_subcommand_is_refused_with_the_list(capsys):
     assert "unknown subcommand 'simulate'" in err and "serve" in err
 
 
-def test_band_is_registered_and_says_it_is_not_available_until_its_module_exists(capsys):
-    """The settlement band (issue 25) plugs in as model.study.band with main(argv, prog)."""
+def test_band_is_registered_with_its_command_line_module():
+    """The settlement band (issue 25) plugs in as model.study.band_cli with main(argv, prog)."""
     band = commands.MODEL_SUBCOMMANDS["band"]
-    assert console.SUBCOMMANDS["band"] is band and band.module == "model.study.band"
-    if band.available:
-        pytest.skip("model.study.band exists: its own tests cover it")
-    assert console.main(["band", "--seeds", "20"]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("tunnelsettle band: error: not available in this version yet")
-    console.main(["--help"])
-    assert "[not available in this version]" in capsys.readouterr().out
+    assert console.SUBCOMMANDS["band"] is band and band.module == "model.study.band_cli"
+    assert band.available
 
 
 def test_a_registered_module_gets_the_arguments_and_the_program_name(monkeypatch):

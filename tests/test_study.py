@@ -301,7 +301,7 @@ def test_read_study_gives_back_failed_and_cancelled_runs(cheap_scenario, tmp_pat
         1: {"train.speed_kmh": 90.0, "seed": 8, "error": "SimulationError: unstable, at 3 s"},
         3: {"train.speed_kmh": 100.0, "seed": 8, "peak_disp_invert_m": 1 / 3 * 1e-3},
     }
-    table = study_module._table(study, rows, cancelled=True)
+    table = study_module.study_table(study, rows, cancelled=True)
     save_study(table, tmp_path)
     back = read_study(tmp_path)
     pd.testing.assert_frame_equal(back, table, check_exact=True)
@@ -311,7 +311,9 @@ def test_read_study_gives_back_failed_and_cancelled_runs(cheap_scenario, tmp_pat
 @pytest.mark.parametrize("missing", ["runs.csv", "study.json"])
 def test_read_study_refuses_a_folder_without_its_files(cheap_scenario, tmp_path, missing):
     study = define_study(cheap_scenario(), {"train.speed_kmh": [90.0]}, seeds=[7])
-    table = study_module._table(study, {0: {"train.speed_kmh": 90.0, "seed": 7}}, cancelled=False)
+    table = study_module.study_table(
+        study, {0: {"train.speed_kmh": 90.0, "seed": 7}}, cancelled=False
+    )
     save_study(table, tmp_path)
     (tmp_path / missing).unlink()
     with pytest.raises(ValueError) as refused:

@@ -47,7 +47,7 @@ def _in_process_study(
     finally:
         numba.set_num_threads(threads)  # run_summary limits the calling thread to one
     cancelled = len(rows) < study.n_runs
-    return execution._table(study, rows, cancelled)
+    return execution.study_table(study, rows, cancelled)
 
 
 @pytest.fixture

@@ -36,7 +36,13 @@ from model.fe.build import (
     transient_analysis,
 )
 from model.fe.inputs import LoadBand, load_band, rayleigh_coefficients, resample_load
-from model.fe.mesh import ELEMENTS_PER_WAVELENGTH, FEMesh, SectionMesh, section_mesh
+from model.fe.mesh import (
+    ELEMENTS_PER_WAVELENGTH,
+    FEMesh,
+    SectionMesh,
+    check_mesh_size,
+    section_mesh,
+)
 from model.fe.store import FEResult
 from model.params import Scenario
 from model.run_cost import machine_load_factor
@@ -162,7 +168,8 @@ def run_fe(
     Raises
     ------
     ValueError
-        Unknown law, bad passages, or a mesh that cannot resolve the load band.
+        Unknown law, bad passages, a mesh that cannot resolve the load band or has more than
+        ``MAX_FE_ELEMENTS`` elements.
     FEUnavailableError
         OpenSeesPy missing or its shared library not loadable.
     """
@@ -172,6 +179,8 @@ def run_fe(
         raise ValueError(f"passages = {passages!r} must be an integer in [1, 100]")
     mesh = mesh or FEMesh()
     _check_boundary(mesh, scenario.tunnel.ring_radius)
+    if mesh.element_size is not None:  # refused before the pipeline run, not after it
+        check_mesh_size(scenario.tunnel.ring_radius, mesh.outer_radius, mesh.element_size)
     report = progress or (lambda stage, fraction: None)
     ops = opensees()
     timings = {}

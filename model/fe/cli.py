@@ -8,12 +8,11 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from model.fe.analysis import SOIL_LAWS, run_fe
 from model.fe.build import FEConvergenceError, FEUnavailableError
 from model.fe.mesh import ELEMENT_SIZE_ALLOWED, FEMesh
 from model.fe.store import FEResult, save_fe_result
+from model.outputs import write_csv_table, write_text_atomic
 
 # ---- command line -----------------------------------------------------------------------------
 FE_STAGES = ("load", "gravity", "dynamic")
@@ -75,16 +74,7 @@ def write_fe_outputs(result: FEResult, out: Path) -> list[Path]:
     columns = {"depth_m": result.depth_m, "peak_disp_m": result.peak_disp_m}
     for p, row in enumerate(result.residual_per_passage_m, start=1):
         columns[f"residual_after_passage_{p}_m"] = row
-    profile = out / f"fe_depth_profile_{result.soil_law}.csv"
-    np.savetxt(
-        profile,
-        np.column_stack(list(columns.values())),
-        delimiter=",",
-        header=",".join(columns),
-        comments="",
-        fmt="%.9g",
-    )
-    summary = out / f"fe_summary_{result.soil_law}.json"
+    profile = write_csv_table(out / f"fe_depth_profile_{result.soil_law}.csv", columns)
     content = {
         "soil_law": result.soil_law,
         "passages": result.passages,
@@ -93,7 +83,9 @@ def write_fe_outputs(result: FEResult, out: Path) -> list[Path]:
         "mesh": result.mesh,
         "timings_s": result.timings_s,
     }
-    summary.write_text(json.dumps(content, indent=2) + "\n", encoding="utf-8")
+    summary = write_text_atomic(
+        out / f"fe_summary_{result.soil_law}.json", json.dumps(content, indent=2) + "\n"
+    )
     return [stored, profile, summary]
 
 

@@ -26,6 +26,14 @@ ELEMENTS_PER_WAVELENGTH = 6
 STEPS_PER_PERIOD = 20
 """FE time steps per period of f_hi (Newmark period elongation ≈ 0.8 %)."""
 
+FE_BYTES_PER_ELEMENT = 9e3
+"""Peak memory per soil element of the OpenSees section (B): the growth of ru_maxrss between
+meshes of 12 474 and 49 387 elements (paper scenario, elastic gravity stage, element sizes 0.5
+and 0.25 m to R = 30 m: 108 and 427 MB above the interpreter's 162 MB)."""
+MAX_FE_ELEMENTS = 200_000
+"""Most soil elements of an FE section: about 1.8 GB at :data:`FE_BYTES_PER_ELEMENT` (a 0.15 m
+mesh to R = 30 m has 137 122)."""
+
 
 @dataclass(frozen=True)
 class FEMesh:
@@ -128,7 +136,9 @@ class SectionMesh:
 
 
 def section_mesh(ring_radius: float, outer_radius: float, element_size: float, aspect: float):
-    """Radii and angles of the graded half-annulus mesh (see the module docstring)."""
+    """Radii and angles of the graded half-annulus mesh (see the module docstring); a mesh of
+    more than :data:`MAX_FE_ELEMENTS` elements is refused before it is built."""
+    check_mesh_size(ring_radius, outer_radius, element_size)
     n_theta = max(4, math.ceil(math.pi * outer_radius / element_size))
     d_theta = math.pi / n_theta
     radii = [ring_radius]
@@ -141,6 +151,27 @@ def section_mesh(ring_radius: float, outer_radius: float, element_size: float, a
         steps = np.diff(radii)[:-1] * (outer_radius - ring_radius) / (radii[-2] - ring_radius)
     radii = ring_radius + np.concatenate(([0.0], np.cumsum(steps)))
     return SectionMesh(radii=radii, thetas=np.linspace(0.0, math.pi, n_theta + 1))
+
+
+def check_mesh_size(ring_radius: float, outer_radius: float, element_size: float) -> None:
+    """Refuse a mesh of more than :data:`MAX_FE_ELEMENTS` elements, from a lower bound of its
+    count that needs no mesh: n_θ = πR/h elements around, at least (R − a)/h rings (no radial
+    step exceeds h)."""
+    with np.errstate(over="ignore"):
+        around = np.float64(math.pi) * outer_radius / element_size
+        fewest = around * max(outer_radius - ring_radius, element_size) / element_size
+    if not fewest <= MAX_FE_ELEMENTS:  # also inf and nan
+        with np.errstate(over="ignore"):
+            area = np.float64(math.pi) * outer_radius * (outer_radius - ring_radius)
+        shortest = math.sqrt(area / MAX_FE_ELEMENTS) if np.isfinite(area) else math.inf
+        size = f" ≥ {shortest:.3g} m" if math.isfinite(shortest) else ""
+        count = f"at least {fewest:.3g}" if np.isfinite(fewest) else "more than 1e308"
+        raise ValueError(
+            f"mesh.element_size = {element_size:g} m with mesh.outer_radius = {outer_radius:g} m "
+            f"gives {count} elements, more than the {MAX_FE_ELEMENTS} allowed (about "
+            f"{MAX_FE_ELEMENTS * FE_BYTES_PER_ELEMENT / 1e9:.1f} GB): take a larger element "
+            f"size{size} or a smaller outer radius"
+        )
 
 
 def arc_loads(mesh: SectionMesh, i: int, traction):

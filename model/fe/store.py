@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+import warnings
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from model.outputs import write_atomic
 from model.params import Scenario
 
 
@@ -49,17 +52,23 @@ class FEResult:
             "timings_s": self.timings_s,
             "scenario_json": self.scenario_json,
         }
-        np.savez_compressed(
-            path, **{name: getattr(self, name) for name in _ARRAYS}, meta=json.dumps(meta)
-        )
+        arrays = {name: getattr(self, name) for name in _ARRAYS}
+        # through an open file: savez would append ".npz" to write_atomic's temporary name
+        write_atomic(path, lambda temporary: _savez(temporary, arrays, json.dumps(meta)))
 
     @classmethod
     def from_npz(cls, path: Path) -> FEResult:
         """Read a file written by :meth:`to_npz`."""
-        with np.load(path) as data:
+        with open(path, "rb") as file, np.load(file) as data:
             meta = json.loads(str(data["meta"]))
             arrays = {name: data[name] for name in _ARRAYS}
         return cls(**meta, **arrays)
+
+
+def _savez(path: Path, arrays: dict[str, np.ndarray], meta: str) -> None:
+    """Compressed ``.npz`` of the arrays and the metadata's JSON, at exactly ``path``."""
+    with open(path, "wb") as file:
+        np.savez_compressed(file, **arrays, meta=meta)
 
 
 _ARRAYS = (
@@ -76,8 +85,22 @@ _ARRAYS = (
 
 # ---- stored results ---------------------------------------------------------------------------
 def scenario_key(scenario: Scenario) -> str:
-    """Hash of the scenario's JSON (16 hex digits): the key of stored FE results."""
-    return hashlib.sha256(scenario.to_json(indent=None).encode("utf-8")).hexdigest()[:16]
+    """Hash (16 hex digits) of what an FE result depends on: the key of stored FE results.
+
+    That is the pipeline's key of the line load (vehicle, train, track, irregularity with a
+    measured profile by its content's digest, and their numerics) and the tunnel, soil and
+    site the section is built from; the tunnel–soil numerics of the analytical model (e.g. the
+    2.5D wavenumber integral) do not enter.
+    """
+    from model.pipeline import stage_keys
+
+    data = scenario.to_dict()
+    inputs = {
+        "load": stage_keys(scenario)["load"],
+        **{section: data[section] for section in ("tunnel", "soil", "site")},
+    }
+    text = json.dumps(inputs, sort_keys=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
 def result_path(scenario: Scenario, folder, soil_law: str) -> Path:
@@ -120,9 +143,24 @@ def stored_fe_result(scenario: Scenario, folder, soil_law: str | None = None) ->
     Returns
     -------
     FEResult or None
+
+    Warns
+    -----
+    UserWarning
+        A stored file that cannot be read (cut short, not an FE result) is passed over, as if
+        absent, so that it is computed again; the warning names the file.
     """
     for law in (soil_law,) if soil_law else ("mohr_coulomb", "elastic"):
         path = result_path(scenario, folder, law)
-        if path.is_file():
+        if not path.is_file():
+            continue
+        try:
             return FEResult.from_npz(path)
+        except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as error:
+            warnings.warn(
+                f"stored FE result {path} cannot be read ({type(error).__name__}): it is "
+                "ignored and the result computed again",
+                UserWarning,
+                stacklevel=2,
+            )
     return None

@@ -151,11 +151,7 @@ class Scenario(param.Parameterized):
                 raise ValueError(
                     f"scenario is not UTF-8 text (byte {error.start}: {error.reason})"
                 ) from None
-        try:
-            data = json.loads(text.removeprefix("\ufeff"))
-        except RecursionError:
-            raise ValueError("scenario JSON is nested too deeply to be a scenario") from None
-        return cls.from_dict(data)
+        return cls.from_dict(parse_json(text.removeprefix("\ufeff"), "scenario"))
 
     @classmethod
     def from_file(cls, path: str | Path) -> Scenario:
@@ -468,3 +464,22 @@ def _parse_value(parameter: param.Parameter, path: str, text: str) -> Any:
     except ValueError:
         problem = f"is not {kind}; the allowed range is {parameter.allowed_text()}"
         raise ValueError(parameter.refusal_text(text, problem)) from None
+
+
+def parse_json(text: str, what: str) -> Any:
+    """The value of a JSON text, every failure a one-line ``ValueError`` that names ``what``
+    (e.g. "scenario", "study definition") and never quotes the text.
+
+    Raises
+    ------
+    ValueError
+        Not JSON (with the line and column), or nested too deeply for Python's parser.
+    """
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ValueError(
+            f"{what} is not valid JSON ({error.msg} at line {error.lineno} column {error.colno})"
+        ) from None
+    except RecursionError:
+        raise ValueError(f"{what} JSON is nested too deeply to be a {what}") from None

@@ -28,6 +28,7 @@ Modules:
   (:func:`aggregate`) and study folders written and read;
 - ``band``: :func:`settlement_band`, the 5–50–95 % band of the long-term settlement by Monte
   Carlo over irregularity seeds, law constants and site properties (the passage once per
-  seed), and ``python -m model band``;
+  seed);
+- ``band_cli``: ``python -m model band``;
 - ``cli``: ``python -m model study``.
 """

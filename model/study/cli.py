@@ -3,15 +3,26 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from model.study.definition import MAX_RUNS_UNCONFIRMED, SAMPLINGS, Study, define_study
-from model.study.execution import SCHEDULER_ENV, execute_study
-from model.study.tables import load_study, save_study
+from model.outputs import check_output_folder, replacing_folder
+from model.study.definition import (
+    MAX_RUNS_UNCONFIRMED,
+    SAMPLINGS,
+    Study,
+    check_run_count,
+    define_study,
+)
+from model.study.execution import SCHEDULER_ENV, execute_study, study_table
+from model.study.tables import STUDY_FILES, load_study, save_study
+
+JOURNAL_FILE = "runs.partial.jsonl"
+"""Finished runs, one JSON line each, while a study runs (in the folder being assembled)."""
 
 
 # ---- command line --------------------------------------------------------------------------
@@ -25,6 +36,22 @@ def parse_values(spec: str) -> list[str] | tuple[str, str] | None:
     parts = [part.strip() for part in spec.split(":")]
     if len(parts) == 2:
         return parts[0], parts[1]
+    start, step, count = _grid_range(spec)
+    # rounded to 12 significant digits so 0.1-type steps give 0.3, not 0.30000000000000004
+    return [f"{start + i * step:.12g}" for i in range(count)]
+
+
+def grid_count(spec: str) -> int:
+    """Number of values of a ``--vary`` grid text, found without building them (1 for a
+    sampling range or nothing: it counts no points)."""
+    if ":" not in spec:
+        return len(spec.split(",")) if spec.strip() else 1
+    return _grid_range(spec)[2] if spec.count(":") == 2 else 1
+
+
+def _grid_range(spec: str) -> tuple[float, float, int]:
+    """(start, step, number of values) of a ``start:stop:step`` text."""
+    parts = [part.strip() for part in spec.split(":")]
     if len(parts) != 3:
         raise ValueError(f"{spec!r} is not start:stop:step, low:high or a,b,c")
     try:
@@ -33,16 +60,17 @@ def parse_values(spec: str) -> list[str] | tuple[str, str] | None:
         raise ValueError(f"{spec!r}: start:stop:step must be numbers") from None
     if not step > 0:
         raise ValueError(f"{spec!r}: the step must be > 0")
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise ValueError(f"{spec!r}: start and stop must be finite numbers")
     count = math.floor((stop - start) / step * (1 + 1e-12) + 1e-9) + 1
     if count < 1:
         raise ValueError(f"{spec!r}: stop is below start, the grid is empty")
-    # rounded to 12 significant digits so 0.1-type steps give 0.3, not 0.30000000000000004
-    return [f"{start + i * step:.12g}" for i in range(count)]
+    return start, step, count
 
 
 def build_parser(prog: str = "python -m model study") -> argparse.ArgumentParser:
     """Argument parser of ``python -m model study``."""
-    from model.cli import add_scenario_arguments
+    from model.cli import add_output_arguments, add_scenario_arguments
 
     parser = argparse.ArgumentParser(
         prog=prog,
@@ -67,18 +95,23 @@ def build_parser(prog: str = "python -m model study") -> argparse.ArgumentParser
     )
     parser.add_argument("--depth-profile", action="store_true", help="keep every depth's peak")
     parser.add_argument("--study", type=Path, help="re-run a study.json (ignores the above)")
-    parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
+    add_output_arguments(parser)
+    add_cluster_arguments(parser)
+    parser.add_argument(
+        "--yes", action="store_true", help=f"allow more than {MAX_RUNS_UNCONFIRMED} runs"
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    return parser
+
+
+def add_cluster_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--scheduler`` and ``--workers`` (where a study's or a band's runs go)."""
     parser.add_argument(
         "--scheduler",
         help=f"existing Dask scheduler tcp://host:port (default ${SCHEDULER_ENV}, else a "
         "LocalCluster with one single-threaded worker per core)",
     )
     parser.add_argument("--workers", type=int, help="LocalCluster workers (default: cores)")
-    parser.add_argument(
-        "--yes", action="store_true", help=f"allow more than {MAX_RUNS_UNCONFIRMED} runs"
-    )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
-    return parser
 
 
 def parse_seeds(text: str, base_seed: int) -> list[int]:
@@ -91,6 +124,7 @@ def parse_seeds(text: str, base_seed: int) -> list[int]:
         raise ValueError(f"--seeds {text!r} is not a count or a list of whole numbers") from None
     if count < 1:
         raise ValueError(f"--seeds {count} must be at least 1")
+    check_run_count(count, confirm=True)  # the seeds alone already too many: before the list
     return list(range(base_seed, base_seed + count))
 
 
@@ -101,6 +135,10 @@ def study_from_args(args: argparse.Namespace) -> Study:
     if args.study:
         return load_study(args.study)
     base = load_scenario(args)
+    seeds = parse_seeds(args.seeds, base.irregularity.seed)
+    if args.sampling == "grid":  # the size from the value counts, before any value is built
+        counts = [grid_count(item.partition("=")[2]) for item in args.vary]
+        check_run_count(math.prod(counts) * len(seeds), args.yes)
     vary: dict[str, Any] = {}
     for item in args.vary:
         path, sep, spec = item.partition("=")
@@ -118,7 +156,7 @@ def study_from_args(args: argparse.Namespace) -> Study:
     return define_study(
         base,
         vary,
-        seeds=parse_seeds(args.seeds, base.irregularity.seed),
+        seeds=seeds,
         sampling=args.sampling,
         n_samples=args.samples,
         sampling_seed=args.sampling_seed,
@@ -150,16 +188,16 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m model study")
     progress = None if args.quiet else StudyProgress()
     try:
         study = study_from_args(args)
-        table = execute_study(
-            study, args.scheduler, progress=progress, confirm=args.yes, n_workers=args.workers
-        )
+        check_output_folder(args.out, args.force)  # before any run
+        with replacing_folder(args.out) as folder:
+            table = _run_and_save(study, args, progress, folder)
     except (ValueError, KeyError, OSError) as error:
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         parser.exit(2, f"error: {message}\n")
     finally:
         if progress is not None:
             progress.close()
-    paths = save_study(table, args.out)
+    paths = [args.out / name for name in STUDY_FILES]
     cancelled = table.attrs["cancelled"]
     if not args.quiet:
         failed = int((table["error"] != "").sum()) if "error" in table else 0
@@ -170,3 +208,32 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m model study")
             file=sys.stderr if cancelled else sys.stdout,
         )
     return 130 if cancelled else 0
+
+
+def _run_and_save(study: Study, args: argparse.Namespace, progress, folder: Path):
+    """Run the study, each finished run appended to ``runs.partial.jsonl`` in ``folder`` as it
+    comes back, then save the study there (a second Ctrl-C saves the runs finished so far, as
+    a cancelled study); the table."""
+    rows: dict[int, dict] = {}
+    journal = folder / JOURNAL_FILE
+    with journal.open("a", encoding="utf-8") as file:
+
+        def record(run: int, row: dict) -> None:
+            rows[run] = row
+            file.write(json.dumps({"run": run, **row}) + "\n")
+            file.flush()
+
+        try:
+            table = execute_study(
+                study,
+                args.scheduler,
+                progress=progress,
+                confirm=args.yes,
+                n_workers=args.workers,
+                record=record,
+            )
+        except KeyboardInterrupt:  # the second Ctrl-C, while the cancelled runs were stopping
+            table = study_table(study, rows, cancelled=True)
+    save_study(table, folder)
+    journal.unlink()
+    return table

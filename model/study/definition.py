@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 from collections.abc import Iterable, Iterator
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -16,12 +17,15 @@ import numpy as np
 import param
 
 from model.params import Scenario
-from model.params.scenario import parameter_path
+from model.params.scenario import parameter_path, parse_json
 from model.track.vehicle_track import check_inputs
 
 MAX_RUNS_UNCONFIRMED = 500
 """Largest study run without ``confirm=True`` / ``--yes`` (about 5 min of the paper case on two
 cores at ~1.2 s per run)."""
+MAX_RUNS = 1_000_000
+"""Largest study run at all (its definition alone takes some hundred MB; about a fortnight of
+the paper case on two cores)."""
 SAMPLINGS = ("grid", "random", "lhs")
 STUDY_FORMAT = "tunnelsettle-study/1"
 
@@ -79,24 +83,40 @@ class Study:
 
     @classmethod
     def from_json(cls, text: str) -> Study:
-        """Validated study from :meth:`to_json` output."""
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise ValueError(f"study definition is not valid JSON: {error}") from None
+        """Validated study from :meth:`to_json` output.
+
+        Raises
+        ------
+        ValueError
+            Not JSON, not a study definition (format tag, a missing or mistyped entry), or a
+            study that :func:`define_study` refuses; one line, never quoting the text.
+        """
+        data = parse_json(text, "study definition")
         if not isinstance(data, dict) or data.get("format") != STUDY_FORMAT:
             raise ValueError(f"not a study definition (expected format {STUDY_FORMAT!r})")
-        base = Scenario.from_dict(data["base"])
-        return define_study(
-            base,
-            vary=data["vary"],
-            seeds=data["seeds"],
-            sampling=data.get("sampling", "grid"),
-            n_samples=data.get("n_samples"),
-            sampling_seed=data.get("sampling_seed", 0),
-            depth_profile=data.get("depth_profile", False),
-            confirm=True,  # the count is checked when the study is run
-        )
+        for key, kind, name in (
+            ("base", dict, "object"),
+            ("vary", dict, "object"),
+            ("seeds", list, "array"),
+        ):
+            if not isinstance(data.get(key), kind):
+                raise ValueError(f"study definition: {key!r} must be a JSON {name}")
+        try:
+            base = Scenario.from_dict(data["base"])
+            return define_study(
+                base,
+                vary=data["vary"],
+                seeds=data["seeds"],
+                sampling=data.get("sampling", "grid"),
+                n_samples=data.get("n_samples"),
+                sampling_seed=data.get("sampling_seed", 0),
+                depth_profile=data.get("depth_profile", False),
+                confirm=True,  # the count is checked when the study is run
+            )
+        except (TypeError, AttributeError, KeyError, OverflowError) as error:
+            raise ValueError(
+                f"study definition: an entry has the wrong type or form ({type(error).__name__})"
+            ) from None
 
 
 def define_study(
@@ -147,34 +167,39 @@ def define_study(
     seeds = [base.irregularity.seed] if seeds is None else list(seeds)
     if not seeds:
         raise ValueError("seeds is empty: give at least one irregularity seed")
+    check_run_count(len(seeds), confirm)
     probe = base.copy()
     for seed in seeds:
         _set(probe, "irregularity.seed", seed)
     seeds = [int(seed) for seed in seeds]
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"seeds {seeds} repeat a seed: each run would be computed twice")
+    if sampling == "grid":
+        if n_samples is not None:
+            raise ValueError("n_samples is for random or lhs sampling, not for a grid")
+        vary = {
+            path: [spec] if isinstance(spec, str) or not isinstance(spec, Iterable) else list(spec)
+            for path, spec in vary.items()
+        }
+        n_points = math.prod(len(values) for values in vary.values())
+    else:
+        if not vary:
+            raise ValueError(f"{sampling} sampling needs at least one parameter to vary")
+        if n_samples is None or int(n_samples) != n_samples or n_samples < 1:
+            raise ValueError(f"n_samples = {n_samples!r} must be a whole number ≥ 1")
+        n_samples = n_points = int(n_samples)
+    check_run_count(n_points * len(seeds), confirm)  # before any point is built
     checked: dict[str, Any] = {}
     for path, spec in vary.items():
         if path == "irregularity.seed":
             raise ValueError("irregularity.seed is varied through seeds, not vary")
         parameter = _parameter(path)
         if sampling == "grid":
-            values = [spec] if isinstance(spec, str) or not isinstance(spec, Iterable) else spec
-            values = [_set(probe, path, value) for value in values]
-            if not values:
+            if not spec:
                 raise ValueError(f"{path}: no values given, the grid is empty")
-            checked[path] = values
+            checked[path] = [_set(probe, path, value) for value in spec]
         else:
             checked[path] = _sampling_range(probe, path, parameter, spec)
-    if sampling == "grid":
-        if n_samples is not None:
-            raise ValueError("n_samples is for random or lhs sampling, not for a grid")
-    else:
-        if not vary:
-            raise ValueError(f"{sampling} sampling needs at least one parameter to vary")
-        if n_samples is None or int(n_samples) != n_samples or n_samples < 1:
-            raise ValueError(f"n_samples = {n_samples!r} must be a whole number ≥ 1")
-        n_samples = int(n_samples)
     study = Study(
         base_json=base.to_json(),
         vary=checked,
@@ -184,7 +209,6 @@ def define_study(
         sampling_seed=int(sampling_seed),
         depth_profile=bool(depth_profile),
     )
-    check_run_count(study.n_runs, confirm)
     for point in study.points:  # the seed changes no constraint, so one check per point
         scenario = study.base
         for path, value in point.items():
@@ -276,7 +300,13 @@ def _sample_points(study: Study) -> list[dict[str, Any]]:
 
 
 def check_run_count(n_runs: int, confirm: bool) -> None:
-    """Refuse more than :data:`MAX_RUNS_UNCONFIRMED` runs unless confirmed."""
+    """Refuse more than :data:`MAX_RUNS_UNCONFIRMED` runs unless confirmed, and more than
+    :data:`MAX_RUNS` in any case."""
+    if n_runs > MAX_RUNS:
+        raise ValueError(
+            f"the study has {n_runs} runs, more than the {MAX_RUNS} allowed: vary fewer "
+            "values or seeds"
+        )
     if n_runs > MAX_RUNS_UNCONFIRMED and not confirm:
         raise ValueError(
             f"the study has {n_runs} runs, more than {MAX_RUNS_UNCONFIRMED} without "

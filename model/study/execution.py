@@ -8,6 +8,8 @@ anywhere computes exactly what :func:`model.pipeline.run` computes in-process. R
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
 import logging
 import multiprocessing
@@ -37,6 +39,8 @@ _ADDRESS_RE = re.compile(r"^(tcp|tls|ucx|ws|wss)://[^\s:/]+:\d+$")
 
 Progress = Callable[[int, int, dict[str, Any]], None]
 """Called with (runs done, runs in all, the finished run's row) as each run comes back."""
+Record = Callable[[int, dict[str, Any]], None]
+"""Called with (the run's place in the study, its row) as each run comes back: to save it."""
 
 # The process's last run, stages and tunnel–soil transfer functions: a study's runs that differ
 # only in the load (seeds, vehicle, track) reuse the soil kernel, the costliest part after the
@@ -125,6 +129,7 @@ def study_client(
     if address:
         if not isinstance(address, str) or not _ADDRESS_RE.match(address):
             raise ValueError(f"scheduler address {address!r} is not of the form tcp://host:port")
+        check_scheduler(address, connect_timeout_s)
         try:
             client = Client(address, timeout=connect_timeout_s, set_as_default=False)
         except (OSError, TimeoutError) as error:
@@ -161,6 +166,51 @@ def worker_start_method() -> str:
     have started. ``"spawn"`` elsewhere (macOS, Windows: Python's default there).
     """
     return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+
+
+def check_scheduler(address: str, timeout_s: float) -> None:
+    """Refuse, within ``timeout_s``, an address where no Dask scheduler answers.
+
+    Dask's client waits past its timeout for a server that accepts the connection but never
+    speaks Dask's protocol (and may try to allocate a frame length read from other bytes), so
+    the scheduler's ``identity`` is asked first, in a thread of its own, bounded in time.
+
+    Raises
+    ------
+    ValueError
+        Nothing listens, nothing answers in time, or what answers is not a Dask scheduler.
+    """
+    pool = concurrent.futures.ThreadPoolExecutor(1)
+    asked = pool.submit(asyncio.run, _scheduler_identity(address, timeout_s))
+    try:
+        identity = asked.result(timeout=timeout_s + 1.0)
+    except (concurrent.futures.TimeoutError, TimeoutError):
+        identity = "the server there accepted the connection but gave no Dask answer"
+    except OSError as error:  # nothing listens, or the connection failed
+        identity = " ".join(str(error).split()) or type(error).__name__
+    except Exception as error:  # noqa: BLE001 — whatever a server of another protocol provokes
+        identity = f"the server there does not speak Dask's protocol: {type(error).__name__}"
+    finally:
+        pool.shutdown(wait=False)
+    if isinstance(identity, dict) and identity.get("type") == "Scheduler":
+        return
+    if not isinstance(identity, str):
+        identity = "the server there is not a Dask scheduler"
+    raise ValueError(
+        f"cannot reach the Dask scheduler at {address} within {timeout_s:g} s ({identity})"
+    )
+
+
+async def _scheduler_identity(address: str, timeout_s: float):
+    """The ``identity`` reply of the server at ``address`` (Dask's comm protocol)."""
+    from distributed.comm import connect
+
+    comm = await asyncio.wait_for(connect(address, timeout=timeout_s), timeout_s)
+    try:
+        await asyncio.wait_for(comm.write({"op": "identity", "reply": True}), timeout_s)
+        return await asyncio.wait_for(comm.read(), timeout_s)
+    finally:
+        comm.abort()
 
 
 def run_study(
@@ -236,12 +286,18 @@ def execute_study(
     confirm: bool = False,
     n_workers: int | None = None,
     connect_timeout_s: float | None = None,
+    record: Record | None = None,
 ) -> pd.DataFrame:
-    """Run a checked :class:`Study` (e.g. from :meth:`Study.from_json`); see :func:`run_study`."""
+    """Run a checked :class:`Study` (e.g. from :meth:`Study.from_json`); see :func:`run_study`.
+
+    ``record(run, row)`` is called as each run comes back (after ``progress``), so a caller can
+    save finished runs at once: a second Ctrl-C (KeyboardInterrupt while the cancelled runs
+    stop) raises out of this function, and the rows recorded are then all there is.
+    """
     check_run_count(study.n_runs, confirm)
     with study_client(scheduler, n_workers, connect_timeout_s) as client:
-        rows, cancelled = _collect(client, study, progress, cancel)
-    return _table(study, rows, cancelled)
+        rows, cancelled = _collect(client, study, progress, cancel, record)
+    return study_table(study, rows, cancelled)
 
 
 SEED_ROUNDS = 3
@@ -276,7 +332,7 @@ def submission_order(n_points: int, n_seeds: int, rounds: int = SEED_ROUNDS) -> 
     ]
 
 
-def _collect(client, study: Study, progress, cancel) -> tuple[dict[int, dict], bool]:
+def _collect(client, study: Study, progress, cancel, record=None) -> tuple[dict[int, dict], bool]:
     """Submit every run of the study (:func:`submission_order`), gather rows as they finish
     (see :func:`collect_tasks`)."""
     tasks = [
@@ -284,10 +340,12 @@ def _collect(client, study: Study, progress, cancel) -> tuple[dict[int, dict], b
         for row, scenario_json in study.runs()
     ]
     order = submission_order(len(study.points), len(study.seeds))
-    return collect_tasks(client, tasks, progress, cancel, order=order)
+    return collect_tasks(client, tasks, progress, cancel, order=order, record=record)
 
 
-def collect_tasks(client, tasks, progress, cancel, order=None) -> tuple[dict[int, dict], bool]:
+def collect_tasks(
+    client, tasks, progress, cancel, order=None, record=None
+) -> tuple[dict[int, dict], bool]:
     """Submit tasks, gather their rows as they finish; on cancel, stop the rest and wait.
 
     Parameters
@@ -301,6 +359,8 @@ def collect_tasks(client, tasks, progress, cancel, order=None) -> tuple[dict[int
         As in :func:`run_study`.
     order : list of int, optional
         The order the tasks are submitted in (a permutation of their places); default as given.
+    record : callable(place, row), optional
+        Told every row as it is gathered (see :func:`execute_study`).
 
     Returns
     -------
@@ -335,6 +395,8 @@ def collect_tasks(client, tasks, progress, cancel, order=None) -> tuple[dict[int
                 rows[index] = {**inputs[index], **_outcome(future)}
                 if progress is not None:
                     progress(len(rows), len(futures), rows[index])
+                if record is not None:
+                    record(index, rows[index])
     except KeyboardInterrupt:
         cancelled = True
     finally:
@@ -345,6 +407,8 @@ def collect_tasks(client, tasks, progress, cancel, order=None) -> tuple[dict[int
         for index, future in enumerate(futures):  # finished while the loop was stopping
             if index not in rows and future.status in ("finished", "error"):
                 rows[index] = {**inputs[index], **_outcome(future)}
+                if record is not None:
+                    record(index, rows[index])
     return rows, cancelled
 
 
@@ -374,8 +438,9 @@ def _wait_idle(client, keys: set[str]) -> None:
         time.sleep(POLL_S)
 
 
-def _table(study: Study, rows: dict[int, dict], cancelled: bool) -> pd.DataFrame:
-    """Rows in study order; ``error`` column only if a run failed."""
+def study_table(study: Study, rows: dict[int, dict], cancelled: bool) -> pd.DataFrame:
+    """A study's table from its rows by run (study order; ``error`` column only if a run
+    failed), with the ``attrs`` of :func:`run_study`."""
     table = pd.DataFrame.from_dict(rows, orient="index").sort_index()
     table.index.name = "run"
     if "error" in table:

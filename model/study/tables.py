@@ -2,17 +2,25 @@
 
 from __future__ import annotations
 
+import hashlib
+import io
+import json
 import re
 from pathlib import Path
 
 import pandas as pd
 
+from model.outputs import write_text_atomic
 from model.params import SECTIONS
 from model.study.definition import Study
 
 BAND = (0.05, 0.95)
 """Quantiles of the band across seeds (numpy's linear interpolation between order statistics)."""
 PROFILE_COLUMN = "profile_peak_disp_{depth:g}m_m"
+STUDY_FILES = ("runs.csv", "bands.csv", "study.json")
+"""The files of a study folder, as :func:`save_study` writes them."""
+SAVED_KEY = "saved"
+"""Key of ``study.json`` recording how the study was saved (cancelled, rows, checksum)."""
 _PROFILE_RE = re.compile(r"^profile_peak_disp_(.+)m_m$")
 
 
@@ -73,23 +81,40 @@ def aggregate(table: pd.DataFrame, band: tuple[float, float] = BAND) -> pd.DataF
 
 
 def save_study(table: pd.DataFrame, folder: Path) -> list[Path]:
-    """Write ``runs.csv`` (one row per run), ``bands.csv`` (:func:`aggregate`) and ``study.json``.
+    """Write ``runs.csv`` (one row per run), ``bands.csv`` (:func:`aggregate`) and ``study.json``
+    (the definition, and under ``"saved"`` whether the study was cancelled, its rows and the
+    SHA-256 of ``runs.csv``, which :func:`read_study` checks); each file written whole
+    (:func:`model.outputs.write_atomic`).
 
     Floats are written in their shortest exact form, so ``pandas.read_csv`` gives back the
     same numbers bit for bit.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    paths = [folder / "runs.csv", folder / "bands.csv", folder / "study.json"]
-    table.to_csv(paths[0])
-    aggregate(table).to_csv(paths[1], index=False)
-    paths[2].write_text(table.attrs["study"] + "\n", encoding="utf-8")
-    return paths
+    runs_text = table.to_csv(lineterminator="\n")
+    definition = json.loads(table.attrs["study"])
+    definition[SAVED_KEY] = {
+        "cancelled": bool(table.attrs["cancelled"]),
+        "n_rows": len(table),
+        "runs_sha256": hashlib.sha256(runs_text.encode("utf-8")).hexdigest(),
+    }
+    texts = (runs_text, aggregate(table).to_csv(index=False), json.dumps(definition, indent=2))
+    return [
+        write_text_atomic(folder / name, text if name != "study.json" else text + "\n")
+        for name, text in zip(STUDY_FILES, texts, strict=True)
+    ]
 
 
 def load_study(path: Path) -> Study:
     """The :class:`Study` of a ``study.json`` written by :func:`save_study`."""
-    return Study.from_json(Path(path).read_text(encoding="utf-8"))
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path} is not a study definition: it is not UTF-8 text") from None
+    try:
+        return Study.from_json(text)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
 
 
 def read_study(folder: Path) -> pd.DataFrame:
@@ -104,13 +129,15 @@ def read_study(folder: Path) -> pd.DataFrame:
     -------
     pandas.DataFrame
         The rows of ``runs.csv`` (the same numbers bit for bit), ``attrs`` ``study``,
-        ``n_runs`` and ``cancelled`` (True when the folder holds fewer rows than the study has
-        runs).
+        ``n_runs`` and ``cancelled`` (as saved; for a folder saved without that record, True
+        when it holds fewer rows than the study has runs).
 
     Raises
     ------
     ValueError
-        A file is missing, or ``study.json`` is not a study definition (one line).
+        A file is missing, ``study.json`` is not a study definition, or ``runs.csv`` does not
+        match it (its checksum, its run numbers or its input columns): one line, never quoting
+        the files.
     """
     folder = Path(folder)
     runs, definition = folder / "runs.csv", folder / "study.json"
@@ -121,10 +148,44 @@ def read_study(folder: Path) -> pd.DataFrame:
                 "python -m model study --out"
             )
     study = load_study(definition)
-    table = pd.read_csv(runs, index_col="run")
+    saved = json.loads(definition.read_text(encoding="utf-8")).get(SAVED_KEY)
+    data = runs.read_bytes()
+    if isinstance(saved, dict) and saved.get("runs_sha256") != hashlib.sha256(data).hexdigest():
+        raise ValueError(
+            f"{runs} does not match {definition} (its SHA-256 differs from the one saved with "
+            "the study): the file was changed or cut short after the study was written"
+        )
+    try:
+        table = pd.read_csv(io.BytesIO(data), index_col="run")
+    except (ValueError, pd.errors.ParserError, UnicodeDecodeError) as error:
+        raise ValueError(f"{runs} is not a study's runs table ({type(error).__name__})") from None
+    _check_runs(table, study, runs)
     if "error" in table:
         table["error"] = table["error"].fillna("")
-    table.attrs.update(
-        study=study.to_json(), n_runs=study.n_runs, cancelled=len(table) < study.n_runs
-    )
+    cancelled = saved["cancelled"] if isinstance(saved, dict) else len(table) < study.n_runs
+    table.attrs.update(study=study.to_json(), n_runs=study.n_runs, cancelled=bool(cancelled))
     return table
+
+
+def _check_runs(table: pd.DataFrame, study: Study, path: Path) -> None:
+    """Refuse a runs table that is not the study's: run numbers outside [0, n_runs) or repeated,
+    or input columns (varied parameters, seed) other than the study's at those runs."""
+    index = table.index
+    if not (pd.api.types.is_integer_dtype(index) and index.is_unique):
+        raise ValueError(f"{path}: the run numbers must be distinct whole numbers")
+    if len(index) and not (index.min() >= 0 and index.max() < study.n_runs):
+        raise ValueError(
+            f"{path}: run numbers must lie in the allowed range [0, {study.n_runs - 1}] "
+            f"(the study has {study.n_runs} runs)"
+        )
+    n_seeds = len(study.seeds)
+    for column in [*study.vary, "seed"]:
+        if column not in table:
+            raise ValueError(f"{path}: the column {column} of the study's inputs is missing")
+        if column == "seed":
+            expected = [study.seeds[run % n_seeds] for run in index]
+        else:
+            expected = [study.points[run // n_seeds][column] for run in index]
+        # as text: the numbers are read back exactly, so their repr is the study's
+        if list(table[column].astype(str)) != [str(value) for value in expected]:
+            raise ValueError(f"{path}: the values of {column} are not the study's at its runs")
