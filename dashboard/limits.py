@@ -9,10 +9,14 @@ from __future__ import annotations
 MEGABYTE = 1_000_000
 SESSION_JSON_BYTES = 2 * MEGABYTE  # a what-if session or a scenario file
 PROFILE_CSV_BYTES = 12 * MEGABYTE  # a measured track-irregularity profile
+BOREHOLE_CSV_BYTES = 3 * MEGABYTE  # a borehole log's layer table
+TRIAXIAL_CSV_BYTES = 3 * MEGABYTE  # a cyclic triaxial test's records
 
 
 def refuse_oversized(data: bytes | str, what: str, limit_bytes: int) -> None:
     """Refuse ``data`` (an uploaded file) when it is larger than ``limit_bytes``.
+
+    Decoded text is measured in characters (one byte each for the ASCII of a CSV file).
 
     Raises
     ------

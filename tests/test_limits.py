@@ -5,8 +5,10 @@ from __future__ import annotations
 
 from dashboard import limits
 from dashboard.app import Dashboard
+from dashboard.longterm_view import CalibrationPanel
+from dashboard.site_view import LayerTable
 from dashboard.whatif_view import WhatIfPanel
-from model.params import Scenario
+from model.params import Scenario, Site
 from model.pipeline import StageCache
 
 OVERSIZED_JSON = b" " * (limits.SESSION_JSON_BYTES + 1)  # valid JSON whitespace, too large
@@ -30,3 +32,14 @@ def test_an_oversized_scenario_file_and_profile_are_refused():
     assert "track.csv is 12.0 MB; the server accepts at most 12.0 MB" in alert
     assert board.scenario.to_json() == before
     assert board.scenario.irregularity.profile_data is None
+
+
+def test_oversized_borehole_and_triaxial_csv_are_refused():
+    table = LayerTable(site=Site())
+    layers_before = list(table.site.layers)
+    table.load_text("0" * (limits.BOREHOLE_CSV_BYTES + 1), "log.csv")
+    assert "log.csv is 3.0 MB; the server accepts at most 3.0 MB" in table.message.object
+    assert list(table.site.layers) == layers_before
+    calibration = CalibrationPanel()
+    calibration.load_text("0" * (limits.TRIAXIAL_CSV_BYTES + 1), "cyclic.csv")
+    assert "cyclic.csv is 3.0 MB" in calibration.message.object and calibration.fit is None
