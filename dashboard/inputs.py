@@ -20,6 +20,7 @@ import panel as pn
 import param
 
 from dashboard.controls import ParameterControl
+from dashboard.limits import SESSION_JSON_BYTES, refuse_oversized
 from dashboard.messages import Messages
 from dashboard.profile_input import ProfileInput
 from model import scenarios
@@ -251,6 +252,7 @@ class InputsPanel:
         filename = self.load_input.filename or "the file"
         self.load_input.clear()  # so that loading the same file again is a new event
         try:
+            refuse_oversized(event.new, filename, SESSION_JSON_BYTES)
             scenario = Scenario.from_json(event.new)
             admit_profile(scenario, data_folder())  # a path: only inside the data folder
         except (ValueError, KeyError, TypeError, AttributeError) as error:

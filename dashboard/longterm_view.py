@@ -21,6 +21,7 @@ import param
 from bokeh.models import CustomJSTickFormatter
 
 from dashboard.longterm_checks import SettlementBandPanel, SmoothRailPanel, settlement_plot
+from dashboard.limits import TRIAXIAL_CSV_BYTES, refuse_oversized
 from dashboard.plot_panes import PlotPanes, PlotsView
 from dashboard.plots import MM, PLOT_MIN_WIDTH, PLOT_OPTIONS, PlotSpec, legend_options
 from dashboard.site_view import (
@@ -304,6 +305,7 @@ class CalibrationPanel(pn.viewable.Viewer):
         """Parse and fit CSV text; show the fits, or the reason they were refused."""
         pore_fit = None
         try:
+            refuse_oversized(text, source, TRIAXIAL_CSV_BYTES)
             data = parse_triaxial_csv(text, source)
             fit = fit_strain_law(data.n_cycles, data.strain_percent, data.stress_ratio)
             if data.pore_pressure_ratio is not None:

@@ -15,6 +15,7 @@ import html
 import panel as pn
 import param
 
+from dashboard.limits import PROFILE_CSV_BYTES, refuse_oversized
 from dashboard.messages import Messages
 from model.params import Irregularity
 from model.params.measured_profile import parse_profile, profile_text
@@ -70,6 +71,7 @@ class ProfileInput:
     def load(self, data: bytes, filename: str) -> None:
         """Use the profile in ``data`` (an uploaded file's bytes), or say why not."""
         try:
+            refuse_oversized(data, filename, PROFILE_CSV_BYTES)
             text = profile_text(data, filename)  # the messages name the file
         except ValueError as error:
             self.messages.show_error("Measured profile not used:", [str(error)])

@@ -29,10 +29,13 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import os
 import sys
 from pathlib import Path
 
 DEFAULT_PORT = 5006  # Panel's
+COOKIE_SECRET_ENV = "TUNNELSETTLE_COOKIE_SECRET"
+MIN_COOKIE_SECRET_CHARS = 32
 
 
 def app_path() -> Path:
@@ -57,7 +60,40 @@ def build_parser(prog: str = "tunnelsettle serve") -> argparse.ArgumentParser:
         help="compile the numerical kernels when the server starts (default: yes)",
     )
     parser.add_argument("--show", action="store_true", help="open the page in a browser")
+    parser.add_argument(
+        "--basic-auth",
+        metavar="FILE",
+        help="JSON file of user names and passwords (Panel's basic auth); needs the cookie secret "
+        f"in the environment variable {COOKIE_SECRET_ENV}",
+    )
     return parser
+
+
+def auth_options(password_file: str | None, environ: dict | None = None) -> list[str]:
+    """``panel serve`` options that turn basic authentication on (none without a password file).
+
+    The passwords stay in ``password_file`` and the cookie secret in the environment, so neither
+    shows in the process list nor in the repository.
+
+    Raises
+    ------
+    ValueError
+        If the file does not exist or the cookie secret is missing or shorter than
+        :data:`MIN_COOKIE_SECRET_CHARS`.
+    """
+    if password_file is None:
+        return []
+    environ = os.environ if environ is None else environ
+    if not Path(password_file).is_file():
+        raise ValueError(f"basic-auth file {password_file!r} does not exist")
+    secret = environ.get(COOKIE_SECRET_ENV, "")
+    if len(secret) < MIN_COOKIE_SECRET_CHARS:
+        raise ValueError(
+            f"cookie secret {COOKIE_SECRET_ENV} has {len(secret)} characters; basic auth needs at "
+            f"least {MIN_COOKIE_SECRET_CHARS} (e.g. python -c 'import secrets; "
+            "print(secrets.token_urlsafe(32))')"
+        )
+    return ["--basic-auth", str(password_file), "--cookie-secret", secret]
 
 
 def serve_command(args: argparse.Namespace, extra: list[str]) -> list[str]:
@@ -69,7 +105,7 @@ def serve_command(args: argparse.Namespace, extra: list[str]) -> list[str]:
         command.append("--warm")
     if args.show:
         command.append("--show")
-    return command + extra
+    return command + auth_options(args.basic_auth) + extra
 
 
 def _html_with_formula(roots) -> bool:
@@ -109,8 +145,12 @@ def compress_responses() -> None:
 
 def main(argv: list[str] | None = None, prog: str = "tunnelsettle serve") -> int:
     """Run the dashboard's server in this process until it stops; returns its exit code."""
-    args, extra = build_parser(prog).parse_known_args(argv)
-    command = serve_command(args, extra)
+    parser = build_parser(prog)
+    args, extra = parser.parse_known_args(argv)
+    try:
+        command = serve_command(args, extra)
+    except ValueError as error:
+        parser.error(str(error))
     print(
         f"dashboard at http://{args.address or 'localhost'}:{args.port}/app: open it once the "
         "server's log says 'Bokeh app running at' (loading the packages takes up to a minute "

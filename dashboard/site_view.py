@@ -23,6 +23,7 @@ import panel as pn
 import param
 from bokeh.models.widgets.tables import HTMLTemplateFormatter
 
+from dashboard.limits import BOREHOLE_CSV_BYTES, refuse_oversized
 from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
 from model.params import LAYER_PROPERTIES, Layer, Site
 from model.params.borehole import borehole_csv, parse_borehole_csv
@@ -332,6 +333,7 @@ class LayerTable(pn.viewable.Viewer):
     def load_text(self, text: str, source: str) -> None:
         """Layers from the text of a borehole CSV, or the reason it was refused."""
         try:
+            refuse_oversized(text, source, BOREHOLE_CSV_BYTES)
             layers = parse_borehole_csv(text, source)
         except ValueError as error:
             self.message.object = f"**Refused:** {html.escape(str(error))}"

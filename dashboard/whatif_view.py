@@ -18,6 +18,7 @@ from functools import partial
 import panel as pn
 import param
 
+from dashboard.limits import SESSION_JSON_BYTES, refuse_oversized
 from dashboard.whatif import (
     CURRENT_LABEL,
     MAX_PINNED,
@@ -314,6 +315,7 @@ class WhatIfPanel(pn.viewable.Viewer):
         filename = self.load_input.filename or "the file"
         self.load_input.clear()  # so that loading the same file again is a new event
         try:
+            refuse_oversized(event.new, filename, SESSION_JSON_BYTES)
             session, current = load_session(event.new, compute=self._compute)
         except (ValueError, SimulationError) as error:
             self._show_message(f"Could not load {filename} as a session: {error}")

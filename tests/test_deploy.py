@@ -1,0 +1,43 @@
+"""Deployment options of ``tunnelsettle serve``: basic auth with a cookie secret from the
+environment, refused with a message when either is missing."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from dashboard import serve
+
+SECRET = "s" * serve.MIN_COOKIE_SECRET_CHARS
+
+
+def _command(argv, environ, monkeypatch):
+    monkeypatch.setattr(serve.os, "environ", environ)
+    args, extra = serve.build_parser().parse_known_args(argv)
+    return serve.serve_command(args, extra)
+
+
+def test_auth_on_with_file_and_secret(tmp_path, monkeypatch):
+    users = tmp_path / "users.json"
+    users.write_text(json.dumps({"engineer": "a long password"}))
+    command = _command(["--basic-auth", str(users)], {serve.COOKIE_SECRET_ENV: SECRET}, monkeypatch)
+    assert command[command.index("--basic-auth") + 1] == str(users)
+    assert command[command.index("--cookie-secret") + 1] == SECRET
+
+
+def test_auth_off_without_file(monkeypatch):
+    assert "--basic-auth" not in _command([], {}, monkeypatch)
+
+
+@pytest.mark.parametrize("secret", ["", "short"])
+def test_missing_or_short_secret_refused(tmp_path, monkeypatch, secret):
+    users = tmp_path / "users.json"
+    users.write_text("{}")
+    with pytest.raises(ValueError, match=serve.COOKIE_SECRET_ENV):
+        _command(["--basic-auth", str(users)], {serve.COOKIE_SECRET_ENV: secret}, monkeypatch)
+
+
+def test_missing_password_file_refused(tmp_path, monkeypatch):
+    with pytest.raises(ValueError, match="does not exist"):
+        _command(["--basic-auth", str(tmp_path / "no.json")], {}, monkeypatch)

@@ -1,0 +1,45 @@
+"""Upload limits (dashboard/limits.py, issue 29 item 3): an oversized scenario, session or
+profile file is refused before it is parsed, with its size and the limit."""
+
+from __future__ import annotations
+
+from dashboard import limits
+from dashboard.app import Dashboard
+from dashboard.longterm_view import CalibrationPanel
+from dashboard.site_view import LayerTable
+from dashboard.whatif_view import WhatIfPanel
+from model.params import Scenario, Site
+from model.pipeline import StageCache
+
+OVERSIZED_JSON = b" " * (limits.SESSION_JSON_BYTES + 1)  # valid JSON whitespace, too large
+
+
+def test_an_oversized_session_file_is_refused_with_its_size():
+    restored = []
+    panel = WhatIfPanel(current=lambda: (Scenario.paper(), None), restore=restored.append)
+    panel.load_input.param.update(filename="big.json", value=OVERSIZED_JSON)
+    assert "big.json is 2.0 MB; the server accepts at most 2.0 MB" in panel.message.object
+    assert restored == []
+
+
+def test_an_oversized_scenario_file_and_profile_are_refused():
+    board = Dashboard(scenario=Scenario.preset("single_bogie"), cache=StageCache())
+    before = board.scenario.to_json()
+    board.inputs.load_input.param.update(filename="big.json", value=OVERSIZED_JSON)
+    assert "big.json is 2.0 MB" in str(board.messages.error_alert.object)
+    board.inputs.profile.load(b"0" * (limits.PROFILE_CSV_BYTES + 1), "track.csv")
+    alert = str(board.messages.error_alert.object)
+    assert "track.csv is 12.0 MB; the server accepts at most 12.0 MB" in alert
+    assert board.scenario.to_json() == before
+    assert board.scenario.irregularity.profile_data is None
+
+
+def test_oversized_borehole_and_triaxial_csv_are_refused():
+    table = LayerTable(site=Site())
+    layers_before = list(table.site.layers)
+    table.load_text("0" * (limits.BOREHOLE_CSV_BYTES + 1), "log.csv")
+    assert "log.csv is 3.0 MB; the server accepts at most 3.0 MB" in table.message.object
+    assert list(table.site.layers) == layers_before
+    calibration = CalibrationPanel()
+    calibration.load_text("0" * (limits.TRIAXIAL_CSV_BYTES + 1), "cyclic.csv")
+    assert "cyclic.csv is 3.0 MB" in calibration.message.object and calibration.fit is None
