@@ -20,8 +20,8 @@ import panel as pn
 import param
 from bokeh.models import CustomJSTickFormatter
 
-from dashboard.longterm_checks import SettlementBandPanel, SmoothRailPanel, settlement_plot
 from dashboard.limits import TRIAXIAL_CSV_BYTES, refuse_oversized
+from dashboard.longterm_checks import SettlementBandPanel, SmoothRailPanel, settlement_plot
 from dashboard.plot_panes import PlotPanes, PlotsView
 from dashboard.plots import MM, PLOT_MIN_WIDTH, PLOT_OPTIONS, PlotSpec, legend_options
 from dashboard.site_view import (

@@ -11,8 +11,8 @@ The sub-packages follow the chain of the computation (docs/model.md):
 - ``study``: many runs on Dask, sweeps and Monte-Carlo bands (§11);
 - ``fe``: the OpenSeesPy finite-element check of the section (§12);
 - ``spectra`` (PSD/FFT helpers shared by the stages), ``run_cost`` (memory and time of a run,
-  estimated before it starts), ``scenarios`` (presets, train types, text overrides), ``outputs`` (result
-  files written whole: a temporary name, then a rename), ``cli``
+  estimated before it starts), ``scenarios`` (presets, train types, text overrides),
+  ``outputs`` (result files written whole: a temporary name, then a rename), ``cli``
   (``python -m model``) and ``commands`` (its subcommand table, light enough for an instant
   ``--help``).
 
