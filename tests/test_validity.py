@@ -226,8 +226,10 @@ def test_6_an_existing_output_folder_is_not_overwritten_without_force(tmp_path, 
         main([*CHEAP_SET, "--out", str(tmp_path)])
     assert info.value.code == 2
     assert "--force" in capsys.readouterr().err
+    assert (tmp_path / "notes.txt").read_text() == "keep me"  # refused: nothing touched
     assert main([*CHEAP_SET, "--out", str(tmp_path), "--force"]) == 0
-    assert (tmp_path / "summary.json").exists() and (tmp_path / "notes.txt").exists()
+    # --force replaces the folder whole (issue 29: no mixture of an old and a new run)
+    assert (tmp_path / "summary.json").exists() and not (tmp_path / "notes.txt").exists()
 
 
 @pytest.mark.parametrize("where", ["file", "parent_is_file"])
