@@ -87,10 +87,6 @@ def serve_study_app(folder: Path) -> Iterator[str]:
                 process.wait()
 
 
-@pytest.mark.skip(
-    reason="known failure since this wave's merges, not yet diagnosed: once a second parameter "
-    "is chosen during a study, Cancel is found disabled (issue 28 follow-up, closing note)"
-)
 def test_study_streams_stays_responsive_and_cancels(tmp_path):
     """Start a 500-run study; once rows stream in (plots drawn), the page still answers: choosing
     a second parameter shows its range at once while the study runs; Cancel ends the study
@@ -108,10 +104,12 @@ def test_study_streams_stays_responsive_and_cancels(tmp_path):
             seeds.press("Enter")
             page.get_by_role("button", name="Start study").click()
             page.get_by_text("runs done").wait_for(timeout=STUDY_WAIT_MS)
+            # a running study's titles end in "(partial: 37 of 500 runs)": match their start, or
+            # the wait would last until the study ends, when Cancel is rightly disabled
             page.wait_for_function(
                 f"""() => {{
                   const shown = ({FIGURES_JS})().filter(f => f.points > 0).map(f => f.title);
-                  return {list(PLOTS)!r}.every(t => shown.includes(t));
+                  return {list(PLOTS)!r}.every(t => shown.some(s => s.startsWith(t)));
                 }}""",
                 timeout=RUN_WAIT_MS,
             )
