@@ -31,7 +31,7 @@ _CARVAJAL_ROMANA_PAGE = "https://www.cfms-sols.org/sites/default/files/Actes/Vol
 
 
 @dataclass(frozen=True)
-class TestConditions:
+class Conditions:
     """What is known of the tests behind a set; :data:`NOT_READ` where the source was not read.
 
     Attributes
@@ -75,7 +75,7 @@ class SoilSet:
         Author, year, title, journal or proceedings, pages.
     read : str
         Where the constants were actually read (page, table) and how (first or second hand).
-    conditions : TestConditions
+    conditions : Conditions
         The test conditions behind the constants.
     pore_pressure : dict or None
         Constants of a pore-pressure law (``a_u``, ``b_u``, ``m_u`` …); None: none was read.
@@ -89,7 +89,7 @@ class SoilSet:
     n: float | None
     citation: str
     read: str
-    conditions: TestConditions
+    conditions: Conditions
     pore_pressure: dict | None = field(default=None)
 
     def constants(self) -> dict[str, float]:
@@ -110,7 +110,7 @@ def _li_selig(soil_class: str, a: float, b: float, m: float, read: str) -> SoilS
         n=None,
         citation=_LI_SELIG,
         read=read,
-        conditions=TestConditions(
+        conditions=Conditions(
             soil=f"fine-grained subgrade soil of USCS class {soil_class} (Li & Selig's grouping "
             "of published repeated-load triaxial data; the individual tests not read)"
         ),
@@ -148,7 +148,7 @@ SOIL_SETS: dict[str, SoilSet] = {
             citation=_CARVAJAL_ROMANA,
             read="p. 1253, text below their Eq. 6 (Chai & Miura's law): 'a = 1.2; b = 0.18; "
             "m = 2.4; n = 1', read at " + _CARVAJAL_ROMANA_PAGE + "assets/basic-html/page380.html",
-            conditions=TestConditions(
+            conditions=Conditions(
                 soil="soft soil subgrade under a flexible pavement (an application, not a test: "
                 "the constants are Li & Selig's CH values with n = 1, assumed by the authors)",
                 confining_stress="not stated (no test)",
