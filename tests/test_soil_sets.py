@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+from param.parameterized import discard_events
 
 from model.cli import load_scenario
 from model.longterm.settlement import long_term_settlement
@@ -90,11 +91,23 @@ def test_choosing_a_set_chooses_its_law_and_validates():
     scenario.longterm.soil_set = "chai_miura_CH"
     assert scenario.longterm.law == "chai_miura"
     scenario.validate()
-    scenario.longterm.law = "li_selig"  # a law the set does not belong to
+    scenario.longterm.law = "li_selig"  # a law the set does not belong to: back to the layers
+    assert scenario.longterm.soil_set == LAYERS
+    scenario.validate()
+    scenario.longterm.soil_set = "li_selig_MH"
+    scenario.longterm.law = "li_selig"  # the set's own law: the set stays
+    assert scenario.longterm.soil_set == "li_selig_MH"
+
+
+def test_a_set_and_another_law_together_are_refused_by_validate():
+    """Only a scenario built around the watchers (both values forced in) can hold a set with
+    another law; validate names both and what to do."""
+    scenario = Scenario.paper()
+    with discard_events(scenario.longterm):
+        scenario.longterm.soil_set = "chai_miura_CH"
+    assert scenario.longterm.law == "li_selig"
     with pytest.raises(ScenarioError, match="longterm.soil_set = 'chai_miura_CH'.*'chai_miura'"):
         scenario.validate()
-    scenario.longterm.soil_set = LAYERS
-    scenario.validate()
 
 
 def test_an_unknown_name_is_refused_naming_parameter_value_and_options():
@@ -184,3 +197,15 @@ def dashboard_inputs():
     from dashboard.messages import Messages
 
     return InputsPanel(Scenario.paper(), "paper", Messages(), lambda: None)
+
+
+def test_the_band_refuses_to_draw_constants_a_set_overrides():
+    """Drawing a layer's a while a named set fixes every layer's a would draw nothing the run
+    uses: refused before anything runs, naming the set and the way out."""
+    from model.study.band import define_band
+
+    scenario = Scenario.paper()
+    scenario.longterm.soil_set = "li_selig_CH"
+    with pytest.raises(ValueError, match="longterm.soil_set = 'li_selig_CH' fixes"):
+        define_band(scenario, 4, law_cv={"a": 0.2})
+    assert len(define_band(scenario, 4)) == 4  # the seeds alone are fine

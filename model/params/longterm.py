@@ -46,7 +46,8 @@ class LongTerm(param.Parameterized):
         doc="Strain-law constants for every layer from a named set of the literature "
         "(model.params.soil_sets: each with its citation and test conditions), or 'layers': "
         "each layer's own constants (soil class or a, b, m, n). Choosing a set also sets the "
-        "law to the set's; read in model.longterm (settlement, statements).",
+        "law to the set's, and choosing another law returns to 'layers'; read in "
+        "model.longterm (settlement, statements).",
     )
     trains_per_day = _q(
         200.0,
@@ -118,3 +119,9 @@ class LongTerm(param.Parameterized):
         """A named set belongs to one law: choosing it chooses that law."""
         if self.soil_set != LAYERS:
             self.law = SOIL_SETS[self.soil_set].law
+
+    @param.depends("law", watch=True)
+    def _set_of_the_law(self):
+        """Another law than the named set's leaves the set: back to each layer's constants."""
+        if self.soil_set != LAYERS and SOIL_SETS[self.soil_set].law != self.law:
+            self.soil_set = LAYERS
