@@ -187,10 +187,10 @@ def wuxi(cache: StageCache) -> tuple[Row, list[str]]:
         "tunnel geometry, train, traffic and the constants of its laws) could not be read.",
         "",
         "**Inputs as published (as far as read).** A 2.5D track–tunnel–ground model of a Wuxi "
-        "metro section in a composite stratum of clay and silt; undrained cyclic accumulation "
-        "of plastic strain and pore pressure of the two soils from cyclic tests; layer-wise "
-        "summation. The dynamic deviator under the tunnel first rises then falls with depth, "
-        f"its peak **{WUXI_DEVIATOR_PA / 1e3:.2f} kPa about {WUXI_DEVIATOR_DEPTH_M} m below the "
+        "metro section in a composite stratum of clay and silt; the undrained accumulation "
+        "of plastic strain and of pore pressure of the two soils under cyclic loading; "
+        "layer-wise summation. The dynamic deviator under the tunnel first rises then falls "
+        f"with depth, its peak **{WUXI_DEVIATOR_PA / 1e3:.2f} kPa about {WUXI_DEVIATOR_DEPTH_M} m below the "
         "tunnel**. Tunnel depth and size, soil strength, train, traffic, the form and the "
         f"constants of both laws: {NOT_READ}.",
         "",

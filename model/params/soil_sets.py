@@ -111,8 +111,8 @@ def _li_selig(soil_class: str, a: float, b: float, m: float, read: str) -> SoilS
         citation=_LI_SELIG,
         read=read,
         conditions=Conditions(
-            soil=f"fine-grained subgrade soil of USCS class {soil_class} (Li & Selig's grouping "
-            "of published repeated-load triaxial data; the individual tests not read)"
+            soil=f"fine-grained subgrade soil of USCS class {soil_class} (the tests behind the "
+            "class values not read)"
         ),
     )
 
@@ -146,8 +146,12 @@ SOIL_SETS: dict[str, SoilSet] = {
             m=2.4,
             n=1.0,
             citation=_CARVAJAL_ROMANA,
-            read="p. 1253, text below their Eq. 6 (Chai & Miura's law): 'a = 1.2; b = 0.18; "
-            "m = 2.4; n = 1', read at " + _CARVAJAL_ROMANA_PAGE + "assets/basic-html/page380.html",
+            read="p. 1253, the text on their Eq. 6 (the law with a, m, n and b, which they "
+            "attribute to Chai and Miura, cited there as 2000): 'a = 1.2; b = 0.18; m = 2.4; "
+            "n = 1', values 'suggested by Li and Selig (1996)', read at "
+            + _CARVAJAL_ROMANA_PAGE
+            + "assets/basic-html/page380.html (the proceedings named from that site's pages "
+            "and the TC 202 header; the title from the paper's first page on scribd.com)",
             conditions=Conditions(
                 soil="soft soil subgrade under a flexible pavement (an application, not a test: "
                 "the constants are Li & Selig's CH values with n = 1, assumed by the authors)",
