@@ -190,9 +190,9 @@ def wuxi(cache: StageCache) -> tuple[Row, list[str]]:
         "metro section in a composite stratum of clay and silt; the undrained accumulation "
         "of plastic strain and of pore pressure of the two soils under cyclic loading; "
         "layer-wise summation. The dynamic deviator under the tunnel first rises then falls "
-        f"with depth, its peak **{WUXI_DEVIATOR_PA / 1e3:.2f} kPa about {WUXI_DEVIATOR_DEPTH_M} m below the "
-        "tunnel**. Tunnel depth and size, soil strength, train, traffic, the form and the "
-        f"constants of both laws: {NOT_READ}.",
+        f"with depth, its peak **{WUXI_DEVIATOR_PA / 1e3:.2f} kPa about "
+        f"{WUXI_DEVIATOR_DEPTH_M} m below the tunnel**. Tunnel depth and size, soil "
+        f"strength, train, traffic, the form and the constants of both laws: {NOT_READ}.",
         "",
         f"**Their result.** {WUXI_TOTAL_MM:.2f} mm once stable = {WUXI_PLASTIC_MM:.2f} mm "
         f"plastic (85 %) + {WUXI_CONSOLIDATION_MM:.2f} mm consolidation (15 %); mostly within "
