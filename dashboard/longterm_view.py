@@ -210,7 +210,8 @@ def _update_all_or_nothing(updates: list[tuple[param.Parameterized, dict]]) -> N
 
 
 def apply_fit(longterm: LongTerm, layer: Layer, fit: dict[str, float]) -> None:
-    """Use fitted a, b, m in ``layer``: Li & Selig's law, soil class 'user'.
+    """Use fitted a, b, m in ``layer``: Li & Selig's law, soil class 'user', and each layer's
+    own constants (``longterm.soil_set = 'layers'``, else a named set would hide the fit).
 
     All or nothing: a value outside its parameter's bounds raises ValueError and leaves both
     objects unchanged.
@@ -218,7 +219,7 @@ def apply_fit(longterm: LongTerm, layer: Layer, fit: dict[str, float]) -> None:
     _update_all_or_nothing(
         [
             (layer, {"soil_class": "user", "a": fit["a"], "b": fit["b"], "m": fit["m"]}),
-            (longterm, {"law": "li_selig"}),
+            (longterm, {"soil_set": "layers", "law": "li_selig"}),
         ]
     )
 

@@ -44,6 +44,7 @@ from model.longterm.statements import (
 )
 from model.longterm.strain_laws import permanent_strain_percent
 from model.params.site import SECONDS_PER_YEAR
+from model.params.soil_sets import strain_law_constants
 from model.soil.stresses import StressResponse
 
 __all__ = ["LongTermResult", "long_term_settlement", "trapezoid_thickness"]
@@ -200,14 +201,14 @@ def long_term_settlement(stress: StressResponse, scenario) -> LongTermResult:
     per_train = column.interpolate(cycles_per_train(stress, scenario))
     years = np.geomspace(min(1.0 / DAYS_PER_YEAR, lt.years), lt.years, N_YEARS)
     n_cycles = load_cycles(years, lt.trains_per_day, per_train)
-    laws = [layer.law_parameters(lt.law) for layer in site.layers]
-    a, b, m = (np.array([law[i] for law in laws])[rows] for i in range(3))
+    laws = [strain_law_constants(lt.soil_set, lt.law, layer) for layer in site.layers]
+    a, b, m, n = (np.array([law[name] for law in laws])[rows] for name in ("a", "b", "m", "n"))
     strain = permanent_strain_percent(
         lt.law,
         a,
         b,
         m,
-        layer_values(site, rows, "n"),
+        n,
         deviator,
         state.strength_Pa,
         state.static_deviator_Pa,
@@ -249,7 +250,7 @@ def long_term_settlement(stress: StressResponse, scenario) -> LongTermResult:
         consolidation_coefficient_m2_per_s=consolidation_coefficient(k, m_v)[shown],
         depth90_m=depth_holding_fraction(column.depth_m, strain[-1] + strain_c),
         law=lt.law,
-        law_parameters=law_parameters(lt.law, site.layers[rows[0]]),
+        law_parameters=law_parameters(lt, site.layers[rows[0]]),
         pore_pressure_law=lt.pore_pressure_law,
         statement=law_statement(lt, crossed, per_train[shown]),
         pore_pressure_statement=pore_pressure_statement(lt, tunnel, crossed),

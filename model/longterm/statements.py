@@ -11,6 +11,7 @@ import numpy as np
 from model.longterm.pore_pressure import PORE_PRESSURE_LAWS
 from model.longterm.strain_laws import LAW_NAMES
 from model.params.site import SECONDS_PER_YEAR, Layer
+from model.params.soil_sets import LAYERS, SOIL_SETS, strain_law_constants
 
 SETTLEMENT_COVERS = (
     "train-induced: cyclic plastic strain and consolidation of train-induced pore pressure; "
@@ -49,9 +50,11 @@ def law_statement(longterm, layers: list[Layer], cycles_per_train) -> str:
     lt = longterm
     parts = []
     for layer in layers:
-        parameters = law_parameters(lt.law, layer)
+        parameters = law_parameters(lt, layer)
         source = ""
-        if lt.law == "li_selig":
+        if lt.soil_set != LAYERS:
+            source = f" (soil set {lt.soil_set}: {SOIL_SETS[lt.soil_set].citation})"
+        elif lt.law == "li_selig":
             user = layer.soil_class == "user"
             source = " (user values)" if user else f" (soil class {layer.soil_class})"
         values = ", ".join(f"{k} = {v:g}{' %' if k == 'a' else ''}" for k, v in parameters.items())
@@ -78,12 +81,15 @@ def law_statement(longterm, layers: list[Layer], cycles_per_train) -> str:
     )
 
 
-def law_parameters(law: str, layer: Layer) -> dict[str, float]:
-    """The strain-law constants in force in a layer (a in %, exponents), n for Chai & Miura."""
-    a, b, m = layer.law_parameters(law)
-    parameters = {"a": a, "b": b, "m": m} if law != "monismith" else {"a": a, "b": b}
+def law_parameters(longterm, layer: Layer) -> dict[str, float]:
+    """The strain-law constants in force in a layer (a in %, exponents), n for Chai & Miura:
+    the layer's own, or those of the named set ``longterm.soil_set``."""
+    law = longterm.law
+    constants = strain_law_constants(longterm.soil_set, law, layer)
+    names = ("a", "b") if law == "monismith" else ("a", "b", "m")
+    parameters = {name: constants[name] for name in names}
     if law == "chai_miura":
-        parameters["n"] = layer.n
+        parameters["n"] = constants["n"]
     return parameters
 
 

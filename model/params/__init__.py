@@ -22,6 +22,8 @@ Modules, in the order of the chain:
 - ``numerics``: :class:`Numerics`, the discretisation of every stage;
 - ``site``: :class:`Site` (the soil layers top down and the water table), :class:`Layer`;
 - ``borehole``: a borehole log as a CSV file, read into layers by its header's names and units;
+- ``soil_sets``: named strain-law sets of the literature (``SOIL_SETS``, :class:`SoilSet`), each
+  with its citation and test conditions, chosen by ``longterm.soil_set``;
 - ``longterm``: :class:`LongTerm`, traffic, laws and drainage of the long-term settlement;
 - ``scenario``: :class:`Scenario` (all sections), ``SECTIONS``, presets, JSON, dotted paths;
 - ``display``: units, labels and ranges as the interface shows them.
@@ -54,6 +56,7 @@ from model.params.quantities import (
 )
 from model.params.scenario import SECTIONS, Scenario
 from model.params.site import LAYER_PROPERTIES, LI_SELIG_SOIL_CLASSES, Layer, Site
+from model.params.soil_sets import SOIL_SETS, SoilSet
 from model.params.track import FRA_ROUGHNESS_CM2_RAD_PER_M, HERTZ_FITS, Irregularity, Track
 from model.params.vehicle import Train, Vehicle
 
@@ -67,6 +70,7 @@ __all__ = [
     "LI_SELIG_SOIL_CLASSES",
     "PRESETS_FILE",
     "SECTIONS",
+    "SOIL_SETS",
     "THIN_RING_MAX_RATIO",
     "Choice",
     "Count",
@@ -79,6 +83,7 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "Site",
+    "SoilSet",
     "Soil",
     "Switch",
     "Text",

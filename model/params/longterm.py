@@ -6,6 +6,7 @@ import param
 
 from model.params.quantities import Choice, _q
 from model.params.site import ILLUSTRATIVE
+from model.params.soil_sets import LAYERS, SOIL_SETS, soil_set_names
 
 # ``s.longterm`` parameters of wave 2 that are now properties of each layer (``s.site.layers``):
 # a scenario file that still has them in its long-term section gives them to every layer.
@@ -37,6 +38,16 @@ class LongTerm(param.Parameterized):
         doc="Cyclic strain-accumulation law: Li & Selig (1996) ε_p = a (q_d/σ_s)^m N^b; "
         "Chai & Miura (2002) ε_p = a (q_d/q_f)^m (1 + q_s/q_f)^n N^b; Monismith (1975) "
         "ε_p = A N^b; evaluated in model.longterm.",
+    )
+    soil_set = Choice(
+        default=LAYERS,
+        objects=soil_set_names(),
+        label="Soil parameter set",
+        doc="Strain-law constants for every layer from a named set of the literature "
+        "(model.params.soil_sets: each with its citation and test conditions), or 'layers': "
+        "each layer's own constants (soil class or a, b, m, n). Choosing a set also sets the "
+        "law to the set's, and choosing another law returns to 'layers'; read in "
+        "model.longterm (settlement, statements).",
     )
     trains_per_day = _q(
         200.0,
@@ -102,3 +113,15 @@ class LongTerm(param.Parameterized):
         "in model.longterm.consolidation; the lining conducts k_l/t_l with t_l = "
         "tunnel.thickness. " + ILLUSTRATIVE + " Bounds [0, 1e-3] m/s.",
     )
+
+    @param.depends("soil_set", watch=True, on_init=True)
+    def _law_of_the_set(self):
+        """A named set belongs to one law: choosing it chooses that law."""
+        if self.soil_set != LAYERS:
+            self.law = SOIL_SETS[self.soil_set].law
+
+    @param.depends("law", watch=True)
+    def _set_of_the_law(self):
+        """Another law than the named set's leaves the set: back to each layer's constants."""
+        if self.soil_set != LAYERS and SOIL_SETS[self.soil_set].law != self.law:
+            self.soil_set = LAYERS

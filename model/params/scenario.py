@@ -17,6 +17,7 @@ from model.params.longterm import MOVED_TO_LAYERS, LongTerm
 from model.params.numerics import Numerics
 from model.params.quantities import ScenarioError, _load_presets
 from model.params.site import Site, layers_from_records
+from model.params.soil_sets import LAYERS, SOIL_SETS
 from model.params.track import Irregularity, Track
 from model.params.vehicle import Train, Vehicle
 
@@ -332,6 +333,13 @@ class Scenario(param.Parameterized):
                 + ("" if Path(profile).is_absolute() else f" (relative to {Path.cwd()})")
             )
         problems += self._profile_problems()
+        lt = self.longterm
+        if lt.soil_set != LAYERS and SOIL_SETS[lt.soil_set].law != lt.law:
+            problems.append(
+                f"longterm.soil_set = {lt.soil_set!r} holds constants of the law "
+                f"{SOIL_SETS[lt.soil_set].law!r}, but longterm.law = {lt.law!r}: choose that law "
+                "or longterm.soil_set = 'layers' (each layer's own constants)"
+            )
         if problems:
             raise ScenarioError("inconsistent scenario:\n  - " + "\n  - ".join(problems))
 

@@ -206,6 +206,13 @@ def define_band(
     seeds = band_seeds(scenario, seeds)
     layers = scenario.site.layers
     law = _check_cvs(law_cv or {}, LAW_CONSTANTS, "law_cv")
+    named_set = scenario.longterm.soil_set
+    if named_set != "layers" and (law or calibration is not None):
+        raise ValueError(
+            f"longterm.soil_set = {named_set!r} fixes the strain-law constants of every layer, "
+            "so law_cv and calibration would draw constants the run does not use: set "
+            "longterm.soil_set = 'layers' to draw them"
+        )
     site = _per_layer(site_cv, len(layers))
     for index, (layer, cvs) in enumerate(zip(layers, site, strict=True)):
         for name in cvs:
