@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+import rainflow
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -484,6 +485,32 @@ def test_rainflow_counts_pulses_and_weights_ripples_by_range():
     ripple = np.array([0.0, 2.0, 1.5, 2.0, 0.0])
     assert range_weighted_cycles(ripple) == pytest.approx(1.0 + 0.5 / 2.0, rel=1e-12)
     assert range_weighted_cycles(np.zeros(5)) == 0.0
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    arrays(
+        float,
+        st.integers(1, 80),
+        elements=st.sampled_from([0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0])
+        | st.floats(0.0, 10.0, allow_nan=False),
+    )
+)
+def test_rainflow_kernel_equals_the_rainflow_package(history):
+    """The Numba count follows ``rainflow.extract_cycles`` step for step: on any history (ties,
+    flat stretches and plateaus included) the weighted count is the package's, bit for bit."""
+    series = np.concatenate([[0.0], history, [0.0]])
+    peak = series.max()
+    slope = np.sign(np.diff(series))
+    nonflat = np.flatnonzero(slope)
+    turning = nonflat[1:][slope[nonflat[1:]] != slope[nonflat[:-1]]]
+    points = series[np.concatenate([[0], turning, [series.size - 1]])]
+    expected = (
+        sum(rng * count for rng, _, count, _, _ in rainflow.extract_cycles(points)) / peak
+        if peak > 0.0
+        else 0.0
+    )
+    assert range_weighted_cycles(history) == expected
 
 
 def test_bogie_count_and_rainflow_count_on_the_cheap_run(results):
