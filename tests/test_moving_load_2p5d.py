@@ -3,6 +3,7 @@ model, symmetry, passivity, the shell's beam and rod limits, an independent fini
 model of the same problem, the wavenumber integral (Kelvin limit, convergence), the moving-frame
 pipeline against the direct sum over block forces, and input errors."""
 
+import numba
 import numpy as np
 import param
 import pytest
@@ -12,7 +13,12 @@ import scipy.sparse.linalg
 from model import pipeline
 from model.params import Numerics, Scenario, Soil, Tunnel
 from model.soil.inputs import invert_load_coefficients
-from model.soil.moving_load_2p5d import invert_stress_2p5d, receptance_2p5d
+from model.soil.moving_load_2p5d import (
+    invert_stress_2p5d,
+    receptance_2p5d,
+    shell_soil_field_kernel,
+    shell_soil_field_serial,
+)
 from model.soil.point_load import point_load_response
 from model.soil.response import section_receptance
 from model.soil.section_2d import invert_receptance, soil_field
@@ -581,3 +587,33 @@ def test_2p5d_peak_displacement_converges_with_record_padding(cheap_scenario):
 def test_bad_input_is_refused_with_a_message_naming_it(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="one Numba thread: no parallel run")
+def test_serial_compilation_gives_the_parallel_numbers_bit_for_bit():
+    """One Numba thread (a study worker) runs shell_soil_field_serial, several the parallel
+    kernel (frequencies across threads): two compilations of one source, the same receptance and
+    stresses to the last bit."""
+    soil, tunnel = SOILS["paper"], Tunnel()
+    freq = np.linspace(0.05, 100.0, 40)
+    parallel = invert_stress_2p5d(freq, 2 * np.pi * freq / 22.0, DEPTHS, tunnel, soil, 16)
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        serial = invert_stress_2p5d(freq, 2 * np.pi * freq / 22.0, DEPTHS, tunnel, soil, 16)
+    finally:
+        numba.set_num_threads(before)
+    for name in ("sigma_rr", "sigma_thetatheta", "sigma_xx", "sigma_rx"):
+        np.testing.assert_array_equal(getattr(serial, name), getattr(parallel, name))
+    assert shell_soil_field_serial.signatures and shell_soil_field_kernel.signatures
+
+
+def test_a_branch_point_is_refused_on_the_parallel_path_too():
+    """ξ = ω/c₂ exactly in an undamped soil (β = 0) divides by zero inside the kernel; Numba's
+    parallel loop does not re-raise that, so the wrapper reruns the serial compilation, which
+    does: the same ValueError either way."""
+    soil = Soil(shear_loss_factor=0.0, bulk_loss_factor=0.0)
+    freq = np.array([5.0, 10.0, 20.0])
+    xi = 2 * np.pi * freq / soil.s_wave_speed
+    with pytest.raises(ValueError, match="branch point"):
+        receptance_2p5d(freq, xi, [0.0, 5.0], Tunnel(), soil, 8)

@@ -73,6 +73,7 @@ from model.soil.inputs import (
     ring_constants,
     soil_constants,
 )
+from model.soil.section_2d import _compiled_as, use_serial_kernel
 
 
 # ---- kernel -----------------------------------------------------------------------------------
@@ -229,8 +230,7 @@ def _interface_amplitudes(
     )
 
 
-@numba.njit(cache=True, nogil=True)
-def shell_soil_field_kernel(
+def _shell_soil_field(
     omega, xi, radius, load_coefficients, ring_radius, ring_mass, ring_extensional,
     ring_bending, ring_poisson, shear, lame, density, with_stresses,
 ):  # fmt: skip
@@ -255,14 +255,14 @@ def shell_soil_field_kernel(
     a = ring_radius
     slowness2_p = density / (lame + 2.0 * shear)
     slowness2_s = density / shear
-    ratio_p_a = np.empty(n_max + 1, np.complex128)
-    ratio_s_a = np.empty(n_max + 1, np.complex128)
-    amp_x = np.empty(n_max + 1, np.complex128)
-    amp_y = np.empty(n_max + 1, np.complex128)
-    amp_z = np.empty(n_max + 1, np.complex128)
-    for i in range(n_pairs):
+    for i in numba.prange(n_pairs):
         w = omega[i]
         q = xi[i]
+        ratio_p_a = np.empty(n_max + 1, np.complex128)  # per frequency: per thread
+        ratio_s_a = np.empty(n_max + 1, np.complex128)
+        amp_x = np.empty(n_max + 1, np.complex128)
+        amp_y = np.empty(n_max + 1, np.complex128)
+        amp_z = np.empty(n_max + 1, np.complex128)
         alpha = cmath.sqrt(q * q - w * w * slowness2_p)
         beta = cmath.sqrt(q * q - w * w * slowness2_s)
         omega2_rho = w * w * density
@@ -281,8 +281,12 @@ def shell_soil_field_kernel(
             amp_x[n] = p * x
             amp_y[n] = p * y
             amp_z[n] = p * z
-        inv_ratio_p_a = 1.0 / ratio_p_a
-        inv_ratio_s_a = 1.0 / ratio_s_a
+        # an explicit loop, not 1.0 / array, whose parallel compilation rounds differently
+        inv_ratio_p_a = np.empty(n_max + 1, np.complex128)
+        inv_ratio_s_a = np.empty(n_max + 1, np.complex128)
+        for n in range(n_max + 1):
+            inv_ratio_p_a[n] = 1.0 / ratio_p_a[n]
+            inv_ratio_s_a[n] = 1.0 / ratio_s_a[n]
         for j in range(n_points):
             r = radius[j]
             # at r = a, e_P = e_S = 1 exactly, so the differences e_P − e_S vanish
@@ -351,6 +355,15 @@ def shell_soil_field_kernel(
     return u_r, s_rr, s_tt, s_xx, s_rx
 
 
+# Two compilations of one source, like the 2D kernel's (model.soil.section_2d): across the
+# frequencies on Numba's threads, and serial (one Numba thread, or a forked process); the same
+# arithmetic in the same order, so the same numbers.
+shell_soil_field_kernel = numba.njit(cache=True, parallel=True, nogil=True)(_shell_soil_field)
+shell_soil_field_serial = numba.njit(cache=True, nogil=True)(
+    _compiled_as(_shell_soil_field, "shell_soil_field_serial")
+)
+
+
 # ---- public wrappers --------------------------------------------------------------------------
 @dataclass(frozen=True)
 class StressField:
@@ -394,22 +407,35 @@ def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses):
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
     coefficients = invert_load_coefficients(a, check_harmonics(n_harmonics))
+    arguments = (
+        omega,
+        xi,
+        np.ascontiguousarray(a + depth),
+        coefficients,
+        a,
+        mass,
+        extensional,
+        bending,
+        float(tunnel.poisson_ratio),
+        shear,
+        lame,
+        density,
+        with_stresses,
+    )
     try:
-        fields = shell_soil_field_kernel(
-            omega,
-            xi,
-            np.ascontiguousarray(a + depth),
-            coefficients,
-            a,
-            mass,
-            extensional,
-            bending,
-            float(tunnel.poisson_ratio),
-            shear,
-            lame,
-            density,
-            with_stresses,
-        )
+        if use_serial_kernel():
+            fields = shell_soil_field_serial(*arguments)
+        else:
+            # An exception in one of Numba's threads (a division by zero at a branch point)
+            # comes back garbled (a SystemError) or not at all (its rows left 0, where a loaded
+            # point never moves by exactly 0): the serial compilation then raises it properly
+            # (or gives the same numbers).
+            try:
+                fields = shell_soil_field_kernel(*arguments)
+            except Exception:
+                fields = None
+            if fields is None or (omega.size and not np.all(fields[0].any(axis=1))):
+                fields = shell_soil_field_serial(*arguments)
     except ZeroDivisionError:
         raise ValueError(
             "a wavenumber equals the P- or S-wavenumber ω/c of an undamped soil (a branch "

@@ -261,29 +261,57 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     """
     load = checked_record(line_load_N_per_m, dt_s)
     n_record = load.size
+    step, n_out_pad, f_hz = _record_grid_layout(n_record, dt_s, numerics)
+    dt_out = step * dt_s
+    load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)[1][: f_hz.size].copy()
+    record_s = n_record * dt_s
+    tail_s = response_tail(numerics.max_depth, s_wave_speed)
+    return RecordGrid(
+        f_hz=f_hz,
+        load_spectrum=load_spectrum,
+        n_out_pad=n_out_pad,
+        dt_out=dt_out,
+        n_out=min(n_out_pad, math.ceil((record_s + tail_s) / dt_out)),
+        record_s=record_s,
+    )
+
+
+def _record_grid_layout(n_record: int, dt_s: float, numerics) -> tuple[int, int, np.ndarray]:
+    """(decimation step k, padded length on the output grid, kept frequencies) of a record."""
     f_max = numerics.soil_max_frequency
     step = decimation_factor(dt_s, f_max)
-    dt_out = step * dt_s
     n_out_pad = scipy.fft.next_fast_len(
         math.ceil(numerics.zero_pad_factor * n_record / step), real=True
     )
-    f_hz, load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)
+    f_hz = scipy.fft.rfftfreq(step * n_out_pad, dt_s)
     n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
     if n_keep < 2:
         raise ValueError(
             f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
             f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding"
         )
-    record_s = n_record * dt_s
-    tail_s = response_tail(numerics.max_depth, s_wave_speed)
-    return RecordGrid(
-        f_hz=f_hz[:n_keep],
-        load_spectrum=load_spectrum[:n_keep],
-        n_out_pad=n_out_pad,
-        dt_out=dt_out,
-        n_out=min(n_out_pad, math.ceil((record_s + tail_s) / dt_out)),
-        record_s=record_s,
-    )
+    return step, n_out_pad, f_hz[:n_keep].copy()
+
+
+def record_grid_frequencies(line_load_N_per_m, dt_s: float, numerics) -> np.ndarray:
+    """The frequencies of :func:`padded_record_grid` without transforming the load (Hz).
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Load record (only its length counts).
+    dt_s : float
+        Sampling interval (s), > 0.
+    numerics : model.params.Numerics
+        Uses soil_max_frequency and zero_pad_factor.
+
+    Returns
+    -------
+    ndarray
+        (nk,) 0 … soil_max_frequency, step 1/T_pad, equal to ``padded_record_grid(...).f_hz``.
+    """
+    n_record = checked_record(line_load_N_per_m, dt_s).size
+    return _record_grid_layout(n_record, dt_s, numerics)[2]
 
 
 def kernel_sample_bins(

@@ -284,6 +284,12 @@ ring_soil_field_serial = numba.njit(cache=True, nogil=True)(
 )
 
 
+def use_serial_kernel() -> bool:
+    """True where the kernels' serial compilations run: one Numba thread, or a process forked
+    after this module was imported (see above)."""
+    return numba.get_num_threads() == 1 or os.getpid() != _IMPORTING_PROCESS
+
+
 # ---- public wrappers --------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SoilField:
@@ -329,8 +335,7 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
     """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
-    serial = numba.get_num_threads() == 1 or os.getpid() != _IMPORTING_PROCESS
-    kernel = ring_soil_field_serial if serial else ring_soil_field_kernel
+    kernel = ring_soil_field_serial if use_serial_kernel() else ring_soil_field_kernel
     fields = kernel(
         omega,
         radius,

@@ -36,6 +36,7 @@ from model.soil.response import (
     displacement_response,
     output_depths,
     padded_record_grid,
+    record_grid_frequencies,
     record_grid_transfer,
 )
 from model.soil.section_2d import soil_field
@@ -275,10 +276,10 @@ def section_transfer(line_load_N_per_m, dt_s: float, scenario) -> SectionTransfe
     SectionTransfer
     """
     numerics = scenario.numerics
-    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    f_hz = record_grid_frequencies(line_load_N_per_m, dt_s, numerics)
     depth = output_depths(numerics)
-    receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
-    return SectionTransfer(grid.f_hz, depth, receptance, stresses)
+    receptance, stresses = _grid_transfer(f_hz, depth, scenario)
+    return SectionTransfer(f_hz, depth, receptance, stresses)
 
 
 def section_response(
