@@ -49,8 +49,15 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft
-import scipy.sparse
 
+from model.soil.kernel_sampling import (  # noqa: F401 (re-exported: their home until now)
+    KERNEL_STENCIL,
+    depth_sample_bins,
+    depth_sampled_transfer,
+    kernel_interpolation_matrix,
+    kernel_sample_bins,
+    record_grid_transfer,
+)
 from model.soil.moving_load_2p5d import receptance_2p5d
 from model.soil.section_2d import invert_receptance
 from model.spectra import checked_record, fourier_transform, one_sided_psd
@@ -63,8 +70,6 @@ TAIL_TRANSIT_TIMES = 2.0
 # Depth below the invert at which the paper quotes its Fig. 11 value (2.94 mm); the summary
 # always reports the peak displacement there (docs/model.md §8).
 COMPARISON_DEPTH_M = 11.0
-# Kernel samples in each interpolation stencil between them (module docstring: kernel sampling).
-KERNEL_STENCIL = 6
 # Rows of histories per inverse FFT call (RecordGrid.time_histories); any count gives the same
 # numbers (each row is transformed alone); 16 is faster than all rows at once on the paper case
 # (benchmarks/bench_pipeline.py, docs/tunnel_soil.md).
@@ -314,124 +319,6 @@ def record_grid_frequencies(line_load_N_per_m, dt_s: float, numerics) -> np.ndar
     return _record_grid_layout(n_record, dt_s, numerics)[2]
 
 
-def kernel_sample_bins(
-    n_freq: int, df_hz: float, samples_per_cycle: int, s_wave_speed: float, radius_m: float
-) -> np.ndarray:
-    """Bins of a record's frequency grid at which the tunnel–soil kernel is evaluated.
-
-    Module docstring, kernel sampling: with s = ⌊c₂/(N r Δf)⌋, every bin below N s, every
-    s-th bin from there, and the last bin; every bin when s ≤ 1 or N = 0.
-
-    Parameters
-    ----------
-    n_freq : int
-        Bins of the grid, f_k = k Δf, k = 0 … n_freq − 1.
-    df_hz : float
-        Frequency step Δf (Hz), > 0.
-    samples_per_cycle : int
-        N ≥ 6, samples per period c₂/r of the transfer functions; 0 for every bin.
-    s_wave_speed : float
-        Soil shear-wave speed c₂ (m/s).
-    radius_m : float
-        Distance r from the tunnel axis to the deepest output point (m), a + d_max.
-
-    Returns
-    -------
-    ndarray
-        Increasing bin indices, starting at 0 and ending at n_freq − 1.
-    """
-    if samples_per_cycle == 0:
-        return np.arange(n_freq)
-    stride = math.floor(s_wave_speed / (samples_per_cycle * radius_m * df_hz))
-    dense = samples_per_cycle * stride
-    if stride <= 1 or dense + KERNEL_STENCIL * stride >= n_freq:
-        return np.arange(n_freq)
-    return np.concatenate([np.arange(dense), np.arange(dense, n_freq - 1, stride), [n_freq - 1]])
-
-
-def kernel_interpolation_matrix(sample_bins, n_freq: int) -> scipy.sparse.csr_array:
-    """Weights that give a transfer function at every bin from its values at the sample bins.
-
-    Row k is 1 at bin k's own sample when k is sampled; otherwise the Lagrange weights of the
-    ``KERNEL_STENCIL`` samples centred on the interval that holds k, never the DC bin (bin 0,
-    a band value, not H(0)).
-
-    Parameters
-    ----------
-    sample_bins : ndarray
-        Increasing bins, from :func:`kernel_sample_bins` (at least ``KERNEL_STENCIL`` + 1).
-    n_freq : int
-        Bins of the grid.
-
-    Returns
-    -------
-    scipy.sparse.csr_array
-        (n_freq, n_samples) real weights.
-    """
-    nodes = np.asarray(sample_bins)
-    between = np.setdiff1d(np.arange(n_freq), nodes)
-    interval = np.searchsorted(nodes, between) - 1  # nodes[interval] < bin < nodes[interval + 1]
-    first = np.clip(interval - (KERNEL_STENCIL // 2 - 1), 1, nodes.size - KERNEL_STENCIL)
-    stencil = first[:, None] + np.arange(KERNEL_STENCIL)
-    x, xs = between[:, None].astype(float), nodes[stencil].astype(float)
-    weights = np.empty(stencil.shape)
-    for m in range(KERNEL_STENCIL):
-        others = np.delete(np.arange(KERNEL_STENCIL), m)
-        weights[:, m] = np.prod((x - xs[:, others]) / (xs[:, [m]] - xs[:, others]), axis=1)
-    rows = np.concatenate([nodes, np.repeat(between, KERNEL_STENCIL)])
-    columns = np.concatenate([np.arange(nodes.size), stencil.ravel()])
-    values = np.concatenate([np.ones(nodes.size), weights.ravel()])
-    return scipy.sparse.csr_array((values, (rows, columns)), shape=(n_freq, nodes.size))
-
-
-def record_grid_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> list[np.ndarray]:
-    """Transfer functions at every frequency of a record grid, row 0 the DC band value.
-
-    The kernel is evaluated at :func:`kernel_sample_bins` and interpolated in between (module
-    docstring, kernel sampling); the DC bin holds Re of the value at Δf/(2e), the band average
-    of A + B ln f (:func:`dc_band_receptance`), evaluated in the same call.
-
-    Parameters
-    ----------
-    f_hz : ndarray
-        (nk,) the grid, f_k = k Δf (:func:`padded_record_grid`).
-    depth_m : ndarray
-        (nd,) depths below the ring–soil interface (m), ≥ 0.
-    evaluate : callable
-        ``evaluate(freq_hz)`` → sequence of complex (n, nd) transfer functions at ``freq_hz``
-        (Hz, > 0), fresh arrays.
-    tunnel, soil : model.params.Tunnel, model.params.Soil
-        Ring radius a and S-wave speed c₂, which set the sampling.
-    numerics : model.params.Numerics
-        Uses kernel_samples_per_cycle.
-
-    Returns
-    -------
-    list of ndarray
-        Complex (nk, nd) transfer functions, in the order ``evaluate`` gives them.
-    """
-    f_hz = np.asarray(f_hz, dtype=float)
-    radius = tunnel.ring_radius + float(np.max(depth_m))
-    bins = kernel_sample_bins(
-        f_hz.size, f_hz[1], numerics.kernel_samples_per_cycle, soil.s_wave_speed, radius
-    )
-    freq = f_hz[bins]
-    freq[0] = 0.5 * f_hz[1] / math.e
-    sampled = evaluate(freq)
-    weights = None if bins.size == f_hz.size else kernel_interpolation_matrix(bins, f_hz.size)
-    transfers = []
-    for values in sampled:
-        values[0] = values[0].real
-        if weights is None:
-            transfers.append(values)
-        elif not values.any():  # a component that vanishes under the invert
-            transfers.append(np.zeros((f_hz.size, values.shape[1]), dtype=complex))
-        else:  # real weights: the real and imaginary parts are interpolated alike
-            pairs = np.ascontiguousarray(values).view(float)
-            transfers.append(np.ascontiguousarray(weights @ pairs).view(complex))
-    return transfers
-
-
 def soil_response(
     line_load_N_per_m, dt_s: float, tunnel, soil, numerics, speed_m_s: float | None = None
 ) -> SoilResponse:
@@ -459,10 +346,10 @@ def soil_response(
     """
     grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, soil.s_wave_speed)
     depth = output_depths(numerics)
-    (receptance,) = record_grid_transfer(
+    (receptance,) = depth_sampled_transfer(
         grid.f_hz,
         depth,
-        lambda freq: (
+        lambda freq, depth: (
             section_receptance(freq, depth, tunnel, soil, numerics.n_harmonics, speed_m_s),
         ),
         tunnel,

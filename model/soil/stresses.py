@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from model.longterm.cycles import range_weighted_cycles
+from model.soil.kernel_sampling import depth_sampled_transfer
 from model.soil.moving_load_2p5d import StressField, invert_response_2p5d
 from model.soil.response import (
     SoilResponse,
@@ -37,7 +38,6 @@ from model.soil.response import (
     output_depths,
     padded_record_grid,
     record_grid_frequencies,
-    record_grid_transfer,
 )
 from model.soil.section_2d import soil_field
 
@@ -159,11 +159,11 @@ def _grid_transfer(f_hz, depth, scenario) -> tuple[np.ndarray, StressField]:
     """:func:`invert_transfer` on a record grid, row 0 the DC band value (module docstring,
     step 2), by :func:`model.soil.response.record_grid_transfer` like the displacements."""
 
-    def evaluate(freq):
+    def evaluate(freq, depth):
         receptance, stresses = invert_transfer(freq, depth, scenario)
         return receptance, *stress_components(stresses)
 
-    receptance, *components = record_grid_transfer(
+    receptance, *components = depth_sampled_transfer(
         f_hz, depth, evaluate, scenario.tunnel, scenario.soil, scenario.numerics
     )
     return receptance, StressField(**dict(zip(STRESS_COMPONENTS, components, strict=True)))
