@@ -47,6 +47,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.fft
 
@@ -59,7 +60,7 @@ from model.soil.kernel_sampling import (  # noqa: F401 (re-exported: their home 
     record_grid_transfer,
 )
 from model.soil.moving_load_2p5d import receptance_2p5d
-from model.soil.section_2d import invert_receptance
+from model.soil.section_2d import invert_receptance, use_serial_kernel
 from model.spectra import checked_record, fourier_transform, one_sided_psd
 
 # Output samples per period of the highest retained frequency (see the module docstring).
@@ -231,16 +232,29 @@ class RecordGrid:
 
     def time_histories(self, spectra: np.ndarray) -> np.ndarray:
         """(n_rows, n_out) histories x(t) = ∫ X(f) e^{i2πft} df of (n_rows, nk) spectra."""
-        n_rows, n_freq = spectra.shape[0], self.f_hz.size
+        return self._inverse_rows(spectra.shape[0], lambda rows: spectra[rows])
+
+    def response_histories(self, transfer: np.ndarray) -> np.ndarray:
+        """(n_columns, n_out) histories of the responses H(f) Q(f) to the grid's load, from
+        (nk, n_columns) transfer functions H (the same numbers as ``time_histories`` of the
+        products, without forming them all)."""
+        load = self.load_spectrum[:, None]
+        return self._inverse_rows(transfer.shape[1], lambda rows: (transfer[:, rows] * load).T)
+
+    def _inverse_rows(self, n_rows: int, spectra_of) -> np.ndarray:
+        """Inverse transforms of the rows ``spectra_of(slice)`` gives, a block at a time."""
+        n_freq = self.f_hz.size
         histories = np.empty((n_rows, self.n_out))
         # A block of rows at a time: one zero-padded buffer that stays in the processor's
         # cache, where all rows at once would allocate and fill (rows × n_out_pad) anew.
         padded = np.zeros((min(n_rows, INVERSE_FFT_ROWS), self.n_out_pad // 2 + 1), dtype=complex)
+        workers = 1 if use_serial_kernel() else numba.get_num_threads()
         for first in range(0, n_rows, INVERSE_FFT_ROWS):
-            block = spectra[first : first + INVERSE_FFT_ROWS]
-            padded[: block.shape[0], :n_freq] = block
-            inverse = scipy.fft.irfft(padded[: block.shape[0]], self.n_out_pad, axis=1)
-            histories[first : first + block.shape[0]] = inverse[:, : self.n_out]
+            rows = slice(first, min(first + INVERSE_FFT_ROWS, n_rows))
+            count = rows.stop - rows.start
+            padded[:count, :n_freq] = spectra_of(rows)
+            inverse = scipy.fft.irfft(padded[:count], self.n_out_pad, axis=1, workers=workers)
+            histories[rows] = inverse[:, : self.n_out]
         # Δf · n_out_pad = 1/dt_out turns the inverse DFT into samples of the integral.
         histories /= self.dt_out
         return histories
@@ -395,8 +409,7 @@ def displacement_response(grid: RecordGrid, depth_m, receptance, numerics) -> So
     SoilResponse
     """
     f_hz, load_spectrum = grid.f_hz, grid.load_spectrum
-    disp_spectrum = (receptance * load_spectrum[:, None]).T
-    disp = grid.time_histories(disp_spectrum)
+    disp = grid.response_histories(receptance)
     n_out, dt_out = grid.n_out, grid.dt_out
 
     n_record_out = max(2, min(n_out, round(grid.record_s / dt_out)))
@@ -410,6 +423,6 @@ def displacement_response(grid: RecordGrid, depth_m, receptance, numerics) -> So
         t_s=np.arange(n_out) * dt_out,
         disp_m=disp,
         interface_spectrum_f_hz=f_hz,
-        interface_amplitude_m_per_hz=np.abs(disp_spectrum[0]),
+        interface_amplitude_m_per_hz=np.abs(receptance[:, 0] * load_spectrum),
         line_load_amplitude_N_per_m_per_hz=np.abs(load_spectrum),
     )

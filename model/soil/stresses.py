@@ -332,17 +332,13 @@ def section_response(
 def _deviator_response(grid, depth, stresses: StressField) -> StressResponse:
     """Deviator histories, peaks and rainflow counts from stress transfer functions on a grid.
 
-    Components that vanish identically (σ_rθ, σ_θx at θ = 0; σ_rx in 2D) are not transformed;
-    the others go through one batched inverse FFT.
+    Components that vanish identically (σ_rθ, σ_θx at θ = 0; σ_rx in 2D) are not transformed.
     """
-    components = stress_components(stresses)
-    nonzero = [k for k, component in enumerate(components) if np.any(component)]
-    spectra = np.stack([components[k] for k in nonzero]) * grid.load_spectrum[:, None]
-    n_depth = depth.size
-    transformed = grid.time_histories(spectra.transpose(0, 2, 1).reshape(-1, grid.f_hz.size))
-    histories = [np.zeros((n_depth, grid.n_out))] * len(components)
-    for row, k in enumerate(nonzero):
-        histories[k] = transformed[row * n_depth : (row + 1) * n_depth]
+    zero = np.zeros((depth.size, grid.n_out))
+    histories = [
+        grid.response_histories(component) if np.any(component) else zero
+        for component in stress_components(stresses)
+    ]
     deviator = deviator_stress(*histories)
     return StressResponse(
         depth_m=depth,
