@@ -226,27 +226,35 @@ def test_kernel_samples_are_n_per_wave_period_above_a_graded_band():
 
 def test_each_depth_is_sampled_for_its_own_radius():
     """Paper grid (5401 bins, Δf = 0.0185 Hz, c₂ = 35.8 m/s, a = 2.85 m), 71 depths to 35 m:
-    every depth is in exactly one kernel call, whose stride (that of its deepest depth) is at
-    least 1/√2 of the depth's own ⌊c₂/(N r Δf)⌋ and never above it, and the calls evaluate
-    about 60 % of the (frequency, depth) pairs of sampling every depth like the deepest."""
+    the kernel is evaluated once, at the deepest depth's bins (stride s₀ = 4); every depth is in
+    exactly one group, whose bins are a subset of those with the stride ⌊s/s₀⌋ s₀, s the depth's
+    own ⌊c₂/(N r Δf)⌋ (so s − s₀ < stride ≤ s: at least N samples per period c₂/r), and about
+    60 % of the (frequency, depth) pairs of sampling every depth like the deepest are computed."""
     scenario = Scenario.paper()
     numerics = scenario.numerics
     f = np.arange(5401) * (100.0 / 5400)
     depth = np.linspace(0.0, 35.0, 71)
-    calls = depth_sample_bins(f, depth, scenario.tunnel, scenario.soil, numerics)
-    seen = np.concatenate([np.arange(71)[group] for group, _ in calls])
+    bins, groups = depth_sample_bins(f, depth, scenario.tunnel, scenario.soil, numerics)
+    np.testing.assert_array_equal(
+        bins,
+        kernel_sample_bins(5401, f[1], 12, scenario.soil.s_wave_speed, 2.85 + 35.0),
+    )
+    base = bins[-2] - bins[-3]
+    assert base == 4
+    seen = np.concatenate([np.arange(71)[group] for group, _ in groups])
     np.testing.assert_array_equal(np.sort(seen), np.arange(71))
-    for group, bins in calls:
-        stride = bins[-2] - bins[-3]
+    for group, nodes in groups:
+        own_bins = bins[nodes]
+        stride = own_bins[-2] - own_bins[-3]
+        assert np.max(np.diff(own_bins)) <= stride
         for d in depth[group]:
             own = math.floor(
                 scenario.soil.s_wave_speed
                 / (numerics.kernel_samples_per_cycle * (scenario.tunnel.ring_radius + d) * f[1])
             )
-            assert own / math.sqrt(2) < stride <= own
-    pairs = sum(bins.size * np.arange(71)[group].size for group, bins in calls)
-    deepest = calls[0][1].size * 71
-    assert 0.5 < pairs / deepest < 0.7
+            assert own - base < stride <= own
+    pairs = sum(nodes.size * np.arange(71)[group].size for group, nodes in groups)
+    assert 0.5 < pairs / (bins.size * 71) < 0.7
 
 
 def test_kernel_interpolation_copies_samples_and_is_exact_for_quintics():
@@ -322,13 +330,8 @@ def test_outputs_have_the_documented_shapes_grids_and_spectra(paper_result):
     )
     # bins where the kernel is evaluated for the interface, the last included (the bins
     # between are interpolated, tests/test_longterm.py)
-    sampled = next(
-        bins
-        for group, bins in depth_sample_bins(
-            f, result.depth_m, scenario.tunnel, scenario.soil, numerics
-        )
-        if 0 in np.arange(n_depths)[group]
-    )
+    bins, groups = depth_sample_bins(f, result.depth_m, scenario.tunnel, scenario.soil, numerics)
+    sampled = next(bins[nodes] for group, nodes in groups if 0 in np.arange(n_depths)[group])
     bins = sampled[[1, sampled.size // 4, -1]]
     assert bins[-1] == f.size - 1
     h = invert_receptance(f[bins], 0.0, scenario.tunnel, scenario.soil, numerics.n_harmonics)

@@ -11,9 +11,9 @@ every bin up to 2N), a graded band that joins the stride s at bin N s. The DC bi
 bin are always evaluated; with s ≤ 1 or N = 0 every bin is.
 
 Each output depth d is sampled for its own radius r = a + d (:func:`depth_sampled_transfer`):
-the shallow depths, whose transfer functions turn slowly, take a longer stride than the deepest.
-Depths are grouped so that a group's stride (that of its deepest depth) is within a factor
-``DEPTH_GROUP_RATIO`` of each member's own: one kernel call per group.
+the shallow depths, whose transfer functions turn slowly, take a longer stride than the deepest,
+as a nested subset of the deepest depth's bins (:func:`depth_sample_bins`), so that one kernel
+call at those bins, told which (frequency, depth) pairs to compute, serves every depth.
 """
 
 from __future__ import annotations
@@ -26,9 +26,6 @@ import scipy.sparse
 
 # Kernel samples in each interpolation stencil.
 KERNEL_STENCIL = 6
-# Depths share a kernel call while their own stride is less than this factor above the
-# group's (a few calls, each sampling at most √2 more densely than its shallowest depth needs).
-DEPTH_GROUP_RATIO = math.sqrt(2.0)
 
 
 def kernel_stride(df_hz: float, samples_per_cycle: int, s_wave_speed: float, radius_m: float):
@@ -234,48 +231,35 @@ def record_grid_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> lis
     return _sampled_transfer(f_hz, bins, evaluate(freq), None, slice(None))
 
 
-def depth_groups(df_hz: float, depth_m, tunnel, soil, numerics) -> list[np.ndarray]:
-    """Indices of the depths that share a kernel call, deepest group first (module docstring).
-
-    Parameters
-    ----------
-    df_hz : float
-        Frequency step of the grid (Hz).
-    depth_m : ndarray
-        (nd,) depths below the ring–soil interface (m).
-    tunnel, soil, numerics
-        Ring radius, S-wave speed and kernel_samples_per_cycle.
-
-    Returns
-    -------
-    list of slice or ndarray
-        Indices into ``depth_m`` (a slice where they are consecutive, as for increasing
-        depths), covering every depth once.
-    """
-    depth = np.asarray(depth_m, dtype=float)
-    order = np.argsort(-depth, kind="stable")
-    strides = [
-        kernel_stride(
-            df_hz,
-            numerics.kernel_samples_per_cycle,
-            soil.s_wave_speed,
-            tunnel.ring_radius + depth[j],
-        )
-        for j in order
-    ]
-    groups, start = [], 0
-    for k in range(1, order.size + 1):
-        if k == order.size or strides[k] >= DEPTH_GROUP_RATIO * max(strides[start], 1):
-            members = np.sort(order[start:k])
-            contiguous = members[-1] - members[0] == members.size - 1
-            groups.append(slice(members[0], members[-1] + 1) if contiguous else members)
-            start = k
-    return groups
+@numba.njit(cache=True)
+def nested_subset(nodes, factor, base_stride, samples_per_cycle):
+    """Indices into ``nodes`` (a :func:`kernel_sample_bins` sampling of stride s) of the coarser
+    sampling of stride factor · s: from each kept bin k the next kept node is the farthest within
+    min(factor · s, max(1, ⌊k/N⌋)) bins (the same graded rule); the first and last kept."""
+    n = nodes.size
+    keep = np.empty(n, np.int64)
+    keep[0] = 0
+    count = 1
+    j = 0
+    while True:
+        k = nodes[keep[count - 1]]
+        reach = k + min(factor * base_stride, max(1, k // samples_per_cycle))
+        while j + 1 < n and nodes[j + 1] <= reach:
+            j += 1
+        if j >= n - 1:
+            break
+        keep[count] = j
+        count += 1
+    keep[count] = n - 1
+    return keep[: count + 1]
 
 
-def depth_sample_bins(f_hz, depth_m, tunnel, soil, numerics) -> list[tuple[object, np.ndarray]]:
-    """(depth indices, bins) of each kernel call of :func:`depth_sampled_transfer`: every depth
-    in the indices is evaluated at exactly those bins of ``f_hz`` (bin 0 at Δf/(2e)).
+def depth_sample_bins(f_hz, depth_m, tunnel, soil, numerics):
+    """How :func:`depth_sampled_transfer` samples each depth (module docstring).
+
+    The deepest depth takes :func:`kernel_sample_bins` for its radius, stride s₀; a depth whose
+    own stride is s takes the nested subset of those bins with stride ⌊s/s₀⌋ s₀ (≤ s, so at least
+    N samples per period c₂/r at its radius r), depths with equal factors forming one group.
 
     Parameters
     ----------
@@ -288,21 +272,34 @@ def depth_sample_bins(f_hz, depth_m, tunnel, soil, numerics) -> list[tuple[objec
 
     Returns
     -------
-    list of (slice or ndarray, ndarray)
+    bins : ndarray
+        The deepest depth's bins: the frequencies of the one kernel call.
+    groups : list of (slice or ndarray, ndarray)
+        Per group, its depths (indices into ``depth_m``; a slice where consecutive) and the
+        indices into ``bins`` at which they are evaluated.
     """
     depth = np.asarray(depth_m, dtype=float)
-    calls = []
-    for group in depth_groups(f_hz[1], depth, tunnel, soil, numerics):
-        radius = tunnel.ring_radius + float(np.max(depth[group]))
-        bins = kernel_sample_bins(
-            len(f_hz), f_hz[1], numerics.kernel_samples_per_cycle, soil.s_wave_speed, radius
-        )
-        calls.append((group, bins))
-    return calls
+    n_freq, df = len(f_hz), f_hz[1]
+    count, speed, a = numerics.kernel_samples_per_cycle, soil.s_wave_speed, tunnel.ring_radius
+    bins = kernel_sample_bins(n_freq, df, count, speed, a + float(np.max(depth)))
+    base = kernel_stride(df, count, speed, a + float(np.max(depth)))
+    if bins.size == n_freq:
+        return bins, [(slice(0, depth.size), np.arange(bins.size))]
+    factors = np.array([max(1, kernel_stride(df, count, speed, a + d) // base) for d in depth])
+    groups = []
+    for factor in np.unique(factors)[::-1]:
+        members = np.flatnonzero(factors == factor)
+        nodes = nested_subset(bins, int(factor), base, count)
+        if nodes.size <= KERNEL_STENCIL:
+            nodes = np.arange(bins.size)
+        contiguous = members[-1] - members[0] == members.size - 1
+        columns = slice(members[0], members[-1] + 1) if contiguous else members
+        groups.append((columns, nodes))
+    return bins, groups
 
 
 def depth_sampled_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> list[np.ndarray]:
-    """:func:`record_grid_transfer` with each group of depths sampled for its own radius.
+    """:func:`record_grid_transfer` with each depth sampled for its own radius, one kernel call.
 
     Parameters
     ----------
@@ -311,8 +308,9 @@ def depth_sampled_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> l
     depth_m : ndarray
         (nd,) depths below the ring–soil interface (m), ≥ 0.
     evaluate : callable
-        ``evaluate(freq_hz, depth_m)`` → sequence of complex (n, len(depth_m)) transfer
-        functions at ``freq_hz`` (Hz, > 0) and those depths, fresh arrays.
+        ``evaluate(freq_hz, depth_m, mask)`` → sequence of complex (n, nd) transfer functions at
+        ``freq_hz`` (Hz, > 0) and the depths, fresh arrays; ``mask`` (n, nd) bool marks the
+        pairs that are used (the others may be left 0).
 
     Returns
     -------
@@ -321,12 +319,17 @@ def depth_sampled_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> l
     """
     depth = np.asarray(depth_m, dtype=float)
     f_hz = np.asarray(f_hz, dtype=float)
-    transfers = None
-    for group, bins in depth_sample_bins(f_hz, depth, tunnel, soil, numerics):
-        freq = f_hz[bins]
-        freq[0] = 0.5 * f_hz[1] / math.e
-        sampled = evaluate(freq, depth[group])
-        if transfers is None:
-            transfers = [np.zeros((f_hz.size, depth.size), dtype=complex) for _ in sampled]
-        transfers = _sampled_transfer(f_hz, bins, sampled, transfers, group)
+    bins, groups = depth_sample_bins(f_hz, depth, tunnel, soil, numerics)
+    mask = np.zeros((bins.size, depth.size), dtype=bool)
+    for columns, nodes in groups:
+        mask[np.ix_(nodes, np.arange(depth.size)[columns])] = True
+    freq = f_hz[bins]
+    freq[0] = 0.5 * f_hz[1] / math.e
+    sampled = evaluate(freq, depth, mask)
+    if len(groups) == 1:
+        return _sampled_transfer(f_hz, bins, sampled, None, slice(None))
+    transfers = [np.zeros((f_hz.size, depth.size), dtype=complex) for _ in sampled]
+    for columns, nodes in groups:
+        parts = [values[nodes][:, columns] for values in sampled]
+        _sampled_transfer(f_hz, bins[nodes], parts, transfers, columns)
     return transfers

@@ -233,6 +233,7 @@ def _interface_amplitudes(
 def _shell_soil_field(
     omega, xi, radius, load_coefficients, ring_radius, ring_mass, ring_extensional,
     ring_bending, ring_poisson, shear, lame, density, with_stresses, evanescent_cutoff,
+    point_mask,
 ):  # fmt: skip
     """Soil field below the invert (θ = 0) of a radially loaded shell in a full-space.
 
@@ -243,7 +244,8 @@ def _shell_soil_field(
     shear = μ*, lame = λ* complex (Pa); density (kg/m³); with_stresses: compute σ or leave 0;
     evanescent_cutoff: a point whose radial functions have both decayed by more than
     exp(−cutoff) from the shell, min(Re α, Re β)(r − a) > cutoff, is left 0 (its field is that
-    small against the shell's: K_n(z r)/K_n(z a) ≤ e^{−Re z (r − a)} where it matters).
+    small against the shell's: K_n(z r)/K_n(z a) ≤ e^{−Re z (r − a)} where it matters);
+    point_mask (n_pairs, n_points) bool: the points to compute (the others left 0).
     Returns u_r, σ_rr, σ_θθ, σ_xx, S̃_rx (σ_rx = i S̃_rx), each complex (n_pairs, n_points),
     and done (n_pairs,), True for every frequency completed.
     """
@@ -295,7 +297,7 @@ def _shell_soil_field(
         decay_rate = min(alpha.real, beta.real)
         for j in range(n_points):
             r = radius[j]
-            if (r - a) * decay_rate > evanescent_cutoff:
+            if not point_mask[i, j] or (r - a) * decay_rate > evanescent_cutoff:
                 continue
             # at r = a, e_P = e_S = 1 exactly, so the differences e_P − e_S vanish
             e_p, ratio_p, two_over_zp = radial_start(alpha, r, a, k0p_a)
@@ -417,8 +419,11 @@ def paired_inputs(freq_hz, wavenumber_rad_per_m) -> tuple[np.ndarray, np.ndarray
     return np.ascontiguousarray(2.0 * np.pi * freq), np.ascontiguousarray(xi)
 
 
-def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses):
-    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
+def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses, point_mask=None):
+    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError).
+    ``point_mask`` (n_pairs, n_depth) bool: the points to compute (default all)."""
+    if point_mask is None:
+        point_mask = np.ones((omega.size, np.size(depth)), dtype=bool)
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
     coefficients = invert_load_coefficients(a, check_harmonics(n_harmonics))
@@ -437,6 +442,7 @@ def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses):
         density,
         with_stresses,
         EVANESCENT_CUTOFF,
+        np.ascontiguousarray(point_mask, dtype=bool),
     )
     try:
         if use_serial_kernel():
@@ -532,7 +538,7 @@ def invert_stress_2p5d(
 
 
 def invert_response_2p5d(
-    freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics: int
+    freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics: int, point_mask=None
 ) -> tuple[np.ndarray, StressField]:
     """Receptance and stresses below the invert from one kernel evaluation.
 
@@ -550,6 +556,9 @@ def invert_response_2p5d(
         Lining and soil.
     n_harmonics : int
         Highest circumferential harmonic N ≥ 0.
+    point_mask : ndarray, optional
+        (n, n_depth) bool: only these (frequency, depth) pairs are computed, the others are 0
+        (default: all).
 
     Returns
     -------
@@ -559,7 +568,7 @@ def invert_response_2p5d(
     omega, xi = paired_inputs(freq_hz, wavenumber_rad_per_m)
     depth = checked_depths(depth_m)
     u_r, s_rr, s_tt, s_xx, s_rx = _run_kernel(
-        omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True
+        omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True, point_mask=point_mask
     )
     zero = np.zeros_like(s_rr)
     return u_r, StressField(

@@ -363,7 +363,7 @@ def soil_response(
     (receptance,) = depth_sampled_transfer(
         grid.f_hz,
         depth,
-        lambda freq, depth: (
+        lambda freq, depth, _: (  # every point: the mask only saves work
             section_receptance(freq, depth, tunnel, soil, numerics.n_harmonics, speed_m_s),
         ),
         tunnel,

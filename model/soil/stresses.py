@@ -83,15 +83,18 @@ def plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics: in
     return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics)[1]
 
 
-def _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics: int):
-    """(receptance, StressField) under the invert from one 2D kernel evaluation."""
+def _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics: int, mask=None):
+    """(receptance, StressField) under the invert from one 2D kernel evaluation (``mask``: the
+    (frequency, depth) pairs to compute, default all)."""
     depth = np.atleast_1d(np.asarray(depth_m, dtype=float))
     if np.any(depth < 0.0):
         raise ValueError(
             f"depth_m = {float(depth[depth < 0.0][0])!r} is inside the lining: depths are "
             "measured from the ring–soil interface and must be ≥ 0 m"
         )
-    field = soil_field(freq_hz, tunnel.ring_radius + depth, 0.0, tunnel, soil, n_harmonics)
+    field = soil_field(
+        freq_hz, tunnel.ring_radius + depth, 0.0, tunnel, soil, n_harmonics, point_mask=mask
+    )
     shear = soil.shear_modulus * (1.0 + 1j * soil.shear_loss_factor)
     lame = soil.bulk_modulus * (1.0 + 1j * soil.bulk_loss_factor) - 2.0 * shear / 3.0
     axial = lame / (2.0 * (lame + shear)) * (field.sigma_rr + field.sigma_thetatheta)
@@ -126,7 +129,7 @@ def stress_transfer(freq_hz, depth_m, scenario) -> StressField:
     return invert_transfer(freq_hz, depth_m, scenario)[1]
 
 
-def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField]:
+def invert_transfer(freq_hz, depth_m, scenario, mask=None) -> tuple[np.ndarray, StressField]:
     """Receptance and stresses under the invert per unit line load, one kernel evaluation.
 
     The receptance is :func:`model.soil.response.section_receptance`'s and the stresses
@@ -141,6 +144,8 @@ def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField
         Depths d ≥ 0 below the ring–soil interface (m).
     scenario : model.params.Scenario
         Uses tunnel, soil, numerics.n_harmonics and (2.5D model) train.speed.
+    mask : ndarray, optional
+        (n_freq, n_depth) bool: the pairs to compute; the others are 0 (default: all).
 
     Returns
     -------
@@ -151,16 +156,16 @@ def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField
     if tunnel.model == "2.5d":  # the moving train: the kernel at ξ = ω/v (docs/model.md §9)
         freq = np.atleast_1d(np.asarray(freq_hz, dtype=float))
         wavenumber = 2.0 * np.pi * freq / scenario.train.speed
-        return invert_response_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics)
-    return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics)
+        return invert_response_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics, mask)
+    return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics, mask)
 
 
 def _grid_transfer(f_hz, depth, scenario) -> tuple[np.ndarray, StressField]:
     """:func:`invert_transfer` on a record grid, row 0 the DC band value (module docstring,
     step 2), by :func:`model.soil.response.record_grid_transfer` like the displacements."""
 
-    def evaluate(freq, depth):
-        receptance, stresses = invert_transfer(freq, depth, scenario)
+    def evaluate(freq, depth, mask):
+        receptance, stresses = invert_transfer(freq, depth, scenario, mask)
         return receptance, *stress_components(stresses)
 
     receptance, *components = depth_sampled_transfer(
