@@ -100,21 +100,23 @@ def lagrange_stencils(nodes, n_freq, width):
 
 
 @numba.njit(cache=True)
-def apply_stencils(sample, first, weights, values, out):
-    """Fill (n_freq, m) ``out`` from (n_samples, m) sampled rows by :func:`lagrange_stencils`'s
-    weights (sampled rows copied as they are); each value written once."""
+def apply_stencils(sample, first, weights, row_of, values, out):
+    """Fill (n_freq, m) ``out`` from sampled rows by :func:`lagrange_stencils`'s weights
+    (sampled rows copied as they are; each value written once): sample i is row row_of[i] of
+    ``values``."""
     n_freq, width = weights.shape
     n_columns = values.shape[1]
     for k in range(n_freq):
         if sample[k] >= 0:
+            row = row_of[sample[k]]
             for c in range(n_columns):
-                out[k, c] = values[sample[k], c]
+                out[k, c] = values[row, c]
             continue
         f = first[k]
         for c in range(n_columns):
             total = 0.0
             for m in range(width):
-                total += weights[k, m] * values[f + m, c]
+                total += weights[k, m] * values[row_of[f + m], c]
             out[k, c] = total
 
 
@@ -148,22 +150,30 @@ def kernel_interpolation_matrix(sample_bins, n_freq: int) -> scipy.sparse.csr_ar
     return scipy.sparse.csr_array((values, (rows, columns)), shape=(n_freq, nodes.size))
 
 
-def interpolate_samples(sample_bins, n_freq: int, values: np.ndarray, out=None, stencils=None):
+def interpolate_samples(
+    sample_bins, n_freq: int, values: np.ndarray, out=None, stencils=None, rows=None
+):
     """Complex (n_freq, m) transfer functions from their (n_samples, m) values at the sample
     bins (6-point Lagrange between them, real weights: real and imaginary parts alike), written
     into ``out`` (complex, (n_freq, m), e.g. a block of columns of a larger array) if given;
-    ``stencils``: :func:`lagrange_stencils` of the bins, if already made."""
+    ``stencils``: :func:`lagrange_stencils` of the bins, if already made; ``rows``: the rows of
+    ``values`` that hold the samples (default its rows in order)."""
     if stencils is None:
         stencils = lagrange_stencils(np.asarray(sample_bins, np.int64), n_freq, KERNEL_STENCIL)
-    pairs = np.ascontiguousarray(values).view(float)
+    if rows is None:
+        rows = np.arange(len(sample_bins))
     if out is None:
         out = np.empty((n_freq, values.shape[1]), dtype=complex)
-    if out.strides[1] != out.itemsize:
-        raise ValueError("out must hold whole complex values side by side in each row")
-    # a complex array's float view: (n_freq, 2m), real and imaginary parts side by side
-    floats = out.view(float) if out.flags.c_contiguous else _float_columns(out)
-    apply_stencils(*stencils, pairs, floats)
+    apply_stencils(*stencils, rows, _float_view(values), _float_view(out))
     return out
+
+
+def _float_view(block: np.ndarray) -> np.ndarray:
+    """(n, 2m) floats, real and imaginary parts side by side, of a complex (n, m) array or of a
+    block of columns of one."""
+    if block.strides[1] != block.itemsize:
+        raise ValueError("the complex values of a row must lie side by side")
+    return block.view(float) if block.flags.c_contiguous else _float_columns(block)
 
 
 def _float_columns(block: np.ndarray) -> np.ndarray:
@@ -173,9 +183,10 @@ def _float_columns(block: np.ndarray) -> np.ndarray:
     )
 
 
-def _sampled_transfer(f_hz, bins, sampled, outs, columns) -> list[np.ndarray]:
-    """Fill ``outs[i][:, columns]`` (allocated when None) from the values sampled at ``bins``:
-    row 0 made real (the DC band value), the rest interpolated."""
+def _sampled_transfer(f_hz, bins, sampled, outs, columns, rows=None) -> list[np.ndarray]:
+    """Fill ``outs[i][:, columns]`` (allocated when None) from the values sampled at ``bins``
+    (rows ``rows`` of each ``sampled`` array, default all, and its ``columns``): row 0 made real
+    (the DC band value), the rest interpolated."""
     if outs is None:
         outs = [np.zeros((f_hz.size, values.shape[1]), dtype=complex) for values in sampled]
     stencils = None
@@ -184,13 +195,18 @@ def _sampled_transfer(f_hz, bins, sampled, outs, columns) -> list[np.ndarray]:
     for values, out in zip(sampled, outs, strict=True):
         values[0] = values[0].real
         if bins.size == f_hz.size:
-            out[:, columns] = values
-        elif not values.any():  # a component that vanishes under the invert: zeros
+            out[:, columns] = values[:, columns] if rows is None else values[rows][:, columns]
+        elif not values[:, columns].any():  # a component that vanishes under the invert
             continue
         elif isinstance(columns, slice):  # interpolated in place
-            interpolate_samples(bins, f_hz.size, values, out[:, columns], stencils)
+            interpolate_samples(
+                bins, f_hz.size, values[:, columns], out[:, columns], stencils, rows
+            )
         else:
-            out[:, columns] = interpolate_samples(bins, f_hz.size, values, stencils=stencils)
+            block = np.ascontiguousarray(values[:, columns])
+            out[:, columns] = interpolate_samples(
+                bins, f_hz.size, block, stencils=stencils, rows=rows
+            )
     return outs
 
 
@@ -330,6 +346,5 @@ def depth_sampled_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> l
         return _sampled_transfer(f_hz, bins, sampled, None, slice(None))
     transfers = [np.zeros((f_hz.size, depth.size), dtype=complex) for _ in sampled]
     for columns, nodes in groups:
-        parts = [values[nodes][:, columns] for values in sampled]
-        _sampled_transfer(f_hz, bins[nodes], parts, transfers, columns)
+        _sampled_transfer(f_hz, bins[nodes], sampled, transfers, columns, nodes)
     return transfers
