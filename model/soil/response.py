@@ -238,11 +238,15 @@ class RecordGrid:
         """(n_columns, n_out) histories of the responses H(f) Q(f) to the grid's load, from
         (nk, n_columns) transfer functions H (the same numbers as ``time_histories`` of the
         products, without forming them all)."""
-        load = self.load_spectrum[:, None]
-        return self._inverse_rows(transfer.shape[1], lambda rows: (transfer[:, rows] * load).T)
+        load = np.ascontiguousarray(self.load_spectrum)
+        columns = np.ascontiguousarray(transfer)
+        return self._inverse_rows(
+            transfer.shape[1], None, lambda rows, out: _products_into(columns, load, rows, out)
+        )
 
-    def _inverse_rows(self, n_rows: int, spectra_of) -> np.ndarray:
-        """Inverse transforms of the rows ``spectra_of(slice)`` gives, a block at a time."""
+    def _inverse_rows(self, n_rows: int, spectra_of, fill=None) -> np.ndarray:
+        """Inverse transforms of the rows ``spectra_of(slice)`` gives (or that ``fill(slice,
+        buffer)`` writes into the buffer's first columns), a block at a time."""
         n_freq = self.f_hz.size
         histories = np.empty((n_rows, self.n_out))
         # A block of rows at a time: one zero-padded buffer that stays in the processor's
@@ -252,12 +256,29 @@ class RecordGrid:
         for first in range(0, n_rows, INVERSE_FFT_ROWS):
             rows = slice(first, min(first + INVERSE_FFT_ROWS, n_rows))
             count = rows.stop - rows.start
-            padded[:count, :n_freq] = spectra_of(rows)
+            if fill is None:
+                padded[:count, :n_freq] = spectra_of(rows)
+            else:
+                fill(rows, padded)
             inverse = scipy.fft.irfft(padded[:count], self.n_out_pad, axis=1, workers=workers)
             histories[rows] = inverse[:, : self.n_out]
         # Δf · n_out_pad = 1/dt_out turns the inverse DFT into samples of the integral.
         histories /= self.dt_out
         return histories
+
+
+@numba.njit(cache=True)
+def _product_rows(transfer, load, first, count, out):
+    """out[r, k] = transfer[k, first + r] · load[k], r < count (the transposed products)."""
+    for k in range(load.size):
+        q = load[k]
+        for r in range(count):
+            out[r, k] = transfer[k, first + r] * q
+
+
+def _products_into(transfer, load, rows: slice, out) -> None:
+    """The products H(f) Q(f) of the columns ``rows`` of ``transfer`` into ``out``'s rows."""
+    _product_rows(transfer, load, rows.start, rows.stop - rows.start, out)
 
 
 def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float) -> RecordGrid:
