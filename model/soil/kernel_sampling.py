@@ -359,11 +359,16 @@ def depth_sampled_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> l
     sampled = evaluate(freq, depth, mask)
     if len(groups) == 1:
         return _sampled_transfer(f_hz, bins, sampled, None, slice(None))
-    transfers = [np.zeros((f_hz.size, depth.size), dtype=complex) for _ in sampled]
     if not all(isinstance(columns, slice) for columns, _ in groups):
+        transfers = [np.zeros((f_hz.size, depth.size), dtype=complex) for _ in sampled]
         for columns, nodes in groups:
             _sampled_transfer(f_hz, bins[nodes], sampled, transfers, columns, nodes)
         return transfers
+    # every column of a nonzero function is written below: no need to clear it first
+    transfers = [
+        (np.empty if values.any() else np.zeros)((f_hz.size, depth.size), dtype=complex)
+        for values in sampled
+    ]
     # Every group's columns consecutive (increasing depths): one stencil pass per transfer
     # function over whole C-ordered arrays, far faster than a pass per block of columns
     stencils = [
