@@ -1,6 +1,8 @@
 """Soil stage (model.soil.response): the FFT chain against direct Fourier integration, convergence
 in zero padding and harmonics, the zero-frequency bin, decimation, outputs and errors."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ from model.params import Numerics, Scenario, Soil, Tunnel
 from model.soil.response import (
     dc_band_receptance,
     decimation_factor,
+    depth_sample_bins,
     kernel_interpolation_matrix,
     kernel_sample_bins,
     soil_response,
@@ -203,21 +206,55 @@ def test_dc_bin_receptance_is_the_band_average(soil_name):
 
 
 # ---- kernel sampling ----------------------------------------------------------------------
-def test_kernel_samples_are_n_per_wave_period_above_a_dense_band():
+def test_kernel_samples_are_n_per_wave_period_above_a_graded_band():
     """c₂ = 40 m/s, r = 40 m, Δf = 0.02 Hz: the period c₂/r = 1 Hz spans 50 bins; N = 8 gives
-    the stride s = ⌊50/8⌋ = 6, every bin below N s = 48 (where the kernel's step relative to f
-    reaches 1/N), then every 6th and the last bin. N = 0, or fewer than 2N bins per period
-    (stride 1), evaluates every bin."""
+    the stride s = ⌊50/8⌋ = 6. Below N s = 48 the step at bin k is max(1, ⌊k/N⌋) (every bin up
+    to 2N = 16, then steps of 2 … 5, where the kernel's step relative to f stays ≤ 1/N), then
+    every 6th bin and the last. N = 0, or fewer than 2N bins per period (stride 1), evaluates
+    every bin."""
     bins = kernel_sample_bins(1000, 0.02, 8, 40.0, 40.0)
-    np.testing.assert_array_equal(
-        bins, np.concatenate([np.arange(48), np.arange(48, 999, 6), [999]])
-    )
-    assert np.max(np.diff(bins)) * 0.02 <= 40.0 / (8 * 40.0)
-    assert (bins[48] - bins[47]) / bins[48] <= 1 / 8
+    graded = [*range(16), 16, 18, 20, 22, 24, 27, 30, 33, 37, 41, 46]
+    np.testing.assert_array_equal(bins, np.concatenate([graded, np.arange(51, 999, 6), [999]]))
+    steps = np.diff(bins[:-1])
+    assert np.max(steps) * 0.02 <= 40.0 / (8 * 40.0)
+    assert np.all(steps <= np.maximum(1, bins[:-2] / 8))
     for n_per_cycle in (0, 32):
         np.testing.assert_array_equal(
             kernel_sample_bins(1000, 0.02, n_per_cycle, 40.0, 40.0), np.arange(1000)
         )
+
+
+def test_each_depth_is_sampled_for_its_own_radius():
+    """Paper grid (5401 bins, Δf = 0.0185 Hz, c₂ = 35.8 m/s, a = 2.85 m), 71 depths to 35 m:
+    the kernel is evaluated once, at the deepest depth's bins (stride s₀ = 4); every depth is in
+    exactly one group, whose bins are a subset of those with the stride ⌊s/s₀⌋ s₀, s the depth's
+    own ⌊c₂/(N r Δf)⌋ (so s − s₀ < stride ≤ s: at least N samples per period c₂/r), and about
+    60 % of the (frequency, depth) pairs of sampling every depth like the deepest are computed."""
+    scenario = Scenario.paper()
+    numerics = scenario.numerics
+    f = np.arange(5401) * (100.0 / 5400)
+    depth = np.linspace(0.0, 35.0, 71)
+    bins, groups = depth_sample_bins(f, depth, scenario.tunnel, scenario.soil, numerics)
+    np.testing.assert_array_equal(
+        bins,
+        kernel_sample_bins(5401, f[1], 12, scenario.soil.s_wave_speed, 2.85 + 35.0),
+    )
+    base = bins[-2] - bins[-3]
+    assert base == 4
+    seen = np.concatenate([np.arange(71)[group] for group, _ in groups])
+    np.testing.assert_array_equal(np.sort(seen), np.arange(71))
+    for group, nodes in groups:
+        own_bins = bins[nodes]
+        stride = own_bins[-2] - own_bins[-3]
+        assert np.max(np.diff(own_bins)) <= stride
+        for d in depth[group]:
+            own = math.floor(
+                scenario.soil.s_wave_speed
+                / (numerics.kernel_samples_per_cycle * (scenario.tunnel.ring_radius + d) * f[1])
+            )
+            assert own - base < stride <= own
+    pairs = sum(nodes.size * np.arange(71)[group].size for group, nodes in groups)
+    assert 0.5 < pairs / (bins.size * 71) < 0.7
 
 
 def test_kernel_interpolation_copies_samples_and_is_exact_for_quintics():
@@ -291,15 +328,10 @@ def test_outputs_have_the_documented_shapes_grids_and_spectra(paper_result):
     np.testing.assert_allclose(
         result.line_load_amplitude_N_per_m_per_hz, np.abs(load_spectrum[: f.size]), rtol=1e-12
     )
-    # bins where the kernel is evaluated, the last included (the bins between are interpolated,
-    # tests/test_longterm.py)
-    sampled = kernel_sample_bins(
-        f.size,
-        f[1],
-        numerics.kernel_samples_per_cycle,
-        scenario.soil.s_wave_speed,
-        scenario.tunnel.ring_radius + numerics.max_depth,
-    )
+    # bins where the kernel is evaluated for the interface, the last included (the bins
+    # between are interpolated, tests/test_longterm.py)
+    bins, groups = depth_sample_bins(f, result.depth_m, scenario.tunnel, scenario.soil, numerics)
+    sampled = next(bins[nodes] for group, nodes in groups if 0 in np.arange(n_depths)[group])
     bins = sampled[[1, sampled.size // 4, -1]]
     assert bins[-1] == f.size - 1
     h = invert_receptance(f[bins], 0.0, scenario.tunnel, scenario.soil, numerics.n_harmonics)

@@ -8,8 +8,8 @@ full cycle from 0 to q_d counts 1). N = trains per day × 365 × years × cycles
 
 from __future__ import annotations
 
+import numba
 import numpy as np
-import rainflow
 
 from model.params.site import DAYS_PER_YEAR
 
@@ -50,11 +50,13 @@ def range_weighted_cycles(history) -> float:
     """Rainflow count of a load history, each cycle weighted by its range over the peak.
 
     Σ count_i · range_i / max(history), with count 1 for full and ½ for half cycles (ASTM
-    E1049, the ``rainflow`` package): k pulses from zero to the same peak count k, small
-    ripples count in proportion to their size. 0 for a history that never exceeds 0.
-    The history is taken to start and end at zero (no train before the passage, none after):
-    a record that begins or ends with the train still loading the soil (the 2.5D model's
-    long-range field) would otherwise count one passage as less than one cycle.
+    E1049, the algorithm of the ``rainflow`` package's ``extract_cycles``, which
+    :func:`rainflow_weighted_sum` follows step for step; tests compare the two): k pulses from
+    zero to the same peak count k, small ripples count in proportion to their size. 0 for a
+    history that never exceeds 0. The history is taken to start and end at zero (no train
+    before the passage, none after): a record that begins or ends with the train still loading
+    the soil (the 2.5D model's long-range field) would otherwise count one passage as less than
+    one cycle.
 
     Parameters
     ----------
@@ -70,8 +72,75 @@ def range_weighted_cycles(history) -> float:
     peak = float(series.max())
     if peak <= 0.0:
         return 0.0
-    slope = np.sign(np.diff(series))
-    nonflat = np.flatnonzero(slope)
-    turning = nonflat[1:][slope[nonflat[1:]] != slope[nonflat[:-1]]]
-    points = series[np.concatenate([[0], turning, [series.size - 1]])]
-    return sum(rng * count for rng, _, count, _, _ in rainflow.extract_cycles(points)) / peak
+    return rainflow_weighted_sum(turning_points(series)) / peak
+
+
+@numba.njit(cache=True)
+def turning_points(series):
+    """The first and last values of a 1-D series and every value where its slope changes sign
+    (flat stretches skipped)."""
+    out = np.empty(series.size)
+    out[0] = series[0]
+    count = 1
+    previous = 0.0
+    for i in range(series.size - 1):
+        slope = np.sign(series[i + 1] - series[i])
+        if slope == 0.0:
+            continue
+        if previous != 0.0 and slope != previous:
+            out[count] = series[i]
+            count += 1
+        previous = slope
+    out[count] = series[series.size - 1]
+    return out[: count + 1]
+
+
+@numba.njit(cache=True)
+def rainflow_weighted_sum(points):
+    """Σ count · range over the rainflow cycles of a series (ASTM E1049 §5.4.4), in the order
+    and arithmetic of ``rainflow.extract_cycles`` (its reversals first, then the three-point
+    rule with a half cycle for a range that holds the starting point)."""
+    n = points.size
+    if n < 2:
+        return 0.0
+    # the package's reversals(): the first value, each interior sign change, the last value
+    reversal = np.empty(n)
+    reversal[0] = points[0]
+    m = 1
+    x = points[1]
+    d_last = x - points[0]
+    for k in range(2, n):
+        x_next = points[k]
+        if x_next == x:
+            continue
+        d_next = x_next - x
+        if d_last * d_next < 0.0:
+            reversal[m] = x
+            m += 1
+        x = x_next
+        d_last = d_next
+    if n > 2:
+        reversal[m] = points[n - 1]
+        m += 1
+    stack = np.empty(m)  # the package's deque: stack[head:top]
+    head = 0
+    top = 0
+    total = 0.0
+    for k in range(m):
+        stack[top] = reversal[k]
+        top += 1
+        while top - head >= 3:
+            x1, x2, x3 = stack[top - 3], stack[top - 2], stack[top - 1]
+            if abs(x3 - x2) < abs(x2 - x1):
+                break
+            if top - head == 3:  # the range holds the starting point: half a cycle
+                total += abs(stack[head] - stack[head + 1]) * 0.5
+                head += 1
+            else:
+                total += abs(x1 - x2) * 1.0
+                stack[top - 3] = x3
+                top -= 2
+    while top - head > 1:
+        total += abs(stack[head] - stack[head + 1]) * 0.5
+        head += 1
+    return total

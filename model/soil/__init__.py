@@ -12,6 +12,8 @@ docs/tunnel_soil_3d.md (2.5D).
 - ``moving_load_2p5d``: the lining as a Flügge shell along the tunnel, loaded by
   exp(i(ωt − ξx)): :func:`receptance_2p5d` and the stresses under the invert (§9);
 - ``point_load``: the point-force response of the 2.5D model, the wavenumber integral of H;
+- ``kernel_sampling``: the frequencies (per output depth) at which a kernel is evaluated on a
+  record's grid, and the 6-point Lagrange interpolation between them;
 - ``response``: the line-load history through the chosen kernel to displacement histories at
   depth, their peaks and spectra (§8) — the *transient* response, not the permanent settlement;
 - ``stresses``: the dynamic stresses and deviator under the invert per passage, from the same

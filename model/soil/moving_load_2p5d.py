@@ -73,6 +73,7 @@ from model.soil.inputs import (
     ring_constants,
     soil_constants,
 )
+from model.soil.section_2d import _compiled_as, use_serial_kernel
 
 
 # ---- kernel -----------------------------------------------------------------------------------
@@ -229,10 +230,10 @@ def _interface_amplitudes(
     )
 
 
-@numba.njit(cache=True, nogil=True)
-def shell_soil_field_kernel(
+def _shell_soil_field(
     omega, xi, radius, load_coefficients, ring_radius, ring_mass, ring_extensional,
-    ring_bending, ring_poisson, shear, lame, density, with_stresses,
+    ring_bending, ring_poisson, shear, lame, density, with_stresses, evanescent_cutoff,
+    point_mask,
 ):  # fmt: skip
     """Soil field below the invert (θ = 0) of a radially loaded shell in a full-space.
 
@@ -240,8 +241,13 @@ def shell_soil_field_kernel(
     traction Σ_n p_n cos nθ exp(i(ωt − ξx)), p_n = load_coefficients[n] (Pa per unit load).
 
     Parameters: omega, xi (n_pairs,) paired rad/s > 0 and rad/m; radius (n_points,) m ≥ a;
-    shear = μ*, lame = λ* complex (Pa); density (kg/m³); with_stresses: compute σ or leave 0.
-    Returns u_r, σ_rr, σ_θθ, σ_xx, S̃_rx (σ_rx = i S̃_rx), each complex (n_pairs, n_points).
+    shear = μ*, lame = λ* complex (Pa); density (kg/m³); with_stresses: compute σ or leave 0;
+    evanescent_cutoff: a point whose radial functions have both decayed by more than
+    exp(−cutoff) from the shell, min(Re α, Re β)(r − a) > cutoff, is left 0 (its field is that
+    small against the shell's: K_n(z r)/K_n(z a) ≤ e^{−Re z (r − a)} where it matters);
+    point_mask (n_pairs, n_points) bool: the points to compute (the others left 0).
+    Returns u_r, σ_rr, σ_θθ, σ_xx, S̃_rx (σ_rx = i S̃_rx), each complex (n_pairs, n_points),
+    and done (n_pairs,), True for every frequency completed.
     """
     n_pairs = omega.size
     n_points = radius.size
@@ -252,17 +258,18 @@ def shell_soil_field_kernel(
     s_tt = np.zeros(shape, np.complex128)
     s_xx = np.zeros(shape, np.complex128)
     s_rx = np.zeros(shape, np.complex128)
+    done = np.zeros(n_pairs, np.bool_)
     a = ring_radius
     slowness2_p = density / (lame + 2.0 * shear)
     slowness2_s = density / shear
-    ratio_p_a = np.empty(n_max + 1, np.complex128)
-    ratio_s_a = np.empty(n_max + 1, np.complex128)
-    amp_x = np.empty(n_max + 1, np.complex128)
-    amp_y = np.empty(n_max + 1, np.complex128)
-    amp_z = np.empty(n_max + 1, np.complex128)
-    for i in range(n_pairs):
+    for i in numba.prange(n_pairs):
         w = omega[i]
         q = xi[i]
+        ratio_p_a = np.empty(n_max + 1, np.complex128)  # per frequency: per thread
+        ratio_s_a = np.empty(n_max + 1, np.complex128)
+        amp_x = np.empty(n_max + 1, np.complex128)
+        amp_y = np.empty(n_max + 1, np.complex128)
+        amp_z = np.empty(n_max + 1, np.complex128)
         alpha = cmath.sqrt(q * q - w * w * slowness2_p)
         beta = cmath.sqrt(q * q - w * w * slowness2_s)
         omega2_rho = w * w * density
@@ -281,10 +288,17 @@ def shell_soil_field_kernel(
             amp_x[n] = p * x
             amp_y[n] = p * y
             amp_z[n] = p * z
-        inv_ratio_p_a = 1.0 / ratio_p_a
-        inv_ratio_s_a = 1.0 / ratio_s_a
+        # an explicit loop, not 1.0 / array, whose parallel compilation rounds differently
+        inv_ratio_p_a = np.empty(n_max + 1, np.complex128)
+        inv_ratio_s_a = np.empty(n_max + 1, np.complex128)
+        for n in range(n_max + 1):
+            inv_ratio_p_a[n] = 1.0 / ratio_p_a[n]
+            inv_ratio_s_a[n] = 1.0 / ratio_s_a[n]
+        decay_rate = min(alpha.real, beta.real)
         for j in range(n_points):
             r = radius[j]
+            if not point_mask[i, j] or (r - a) * decay_rate > evanescent_cutoff:
+                continue
             # at r = a, e_P = e_S = 1 exactly, so the differences e_P − e_S vanish
             e_p, ratio_p, two_over_zp = radial_start(alpha, r, a, k0p_a)
             e_s, ratio_s, two_over_zs = radial_start(beta, r, a, k0s_a)
@@ -348,7 +362,23 @@ def shell_soil_field_kernel(
                     (-lame_k1 - axial) * sum_amp + dk * sum_diff + (lame + two_mu) * q * sum_axial
                 )
                 s_rx[i, j] = shear * sum_rx
-    return u_r, s_rr, s_tt, s_xx, s_rx
+        done[i] = True
+    return u_r, s_rr, s_tt, s_xx, s_rx, done
+
+
+# Two compilations of one source, like the 2D kernel's (model.soil.section_2d): across the
+# frequencies on Numba's threads, and serial (one Numba thread, or a forked process); the same
+# arithmetic in the same order, so the same numbers.
+shell_soil_field_kernel = numba.njit(cache=True, parallel=True, nogil=True)(_shell_soil_field)
+shell_soil_field_serial = numba.njit(cache=True, nogil=True)(
+    _compiled_as(_shell_soil_field, "shell_soil_field_serial")
+)
+
+
+# Decay exponent beyond which the kernel leaves a point's field 0: e^−45 ≈ 3e-20 of the field
+# at the shell, far below rounding against any depth's peak (along ξ = ω/v at a subsonic speed
+# the fields are evanescent, and most deep points at the higher frequencies are skipped).
+EVANESCENT_CUTOFF = 45.0
 
 
 # ---- public wrappers --------------------------------------------------------------------------
@@ -389,33 +419,51 @@ def paired_inputs(freq_hz, wavenumber_rad_per_m) -> tuple[np.ndarray, np.ndarray
     return np.ascontiguousarray(2.0 * np.pi * freq), np.ascontiguousarray(xi)
 
 
-def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses):
-    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
+def _run_kernel(omega, xi, depth, tunnel, soil, n_harmonics, with_stresses, point_mask=None):
+    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError).
+    ``point_mask`` (n_pairs, n_depth) bool: the points to compute (default all)."""
+    if point_mask is None:
+        point_mask = np.ones((omega.size, np.size(depth)), dtype=bool)
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
     coefficients = invert_load_coefficients(a, check_harmonics(n_harmonics))
+    arguments = (
+        omega,
+        xi,
+        np.ascontiguousarray(a + depth),
+        coefficients,
+        a,
+        mass,
+        extensional,
+        bending,
+        float(tunnel.poisson_ratio),
+        shear,
+        lame,
+        density,
+        with_stresses,
+        EVANESCENT_CUTOFF,
+        np.ascontiguousarray(point_mask, dtype=bool),
+    )
     try:
-        fields = shell_soil_field_kernel(
-            omega,
-            xi,
-            np.ascontiguousarray(a + depth),
-            coefficients,
-            a,
-            mass,
-            extensional,
-            bending,
-            float(tunnel.poisson_ratio),
-            shear,
-            lame,
-            density,
-            with_stresses,
-        )
+        if use_serial_kernel():
+            fields = shell_soil_field_serial(*arguments)
+        else:
+            # An exception in one of Numba's threads (a division by zero at a branch point)
+            # comes back garbled (a SystemError) or not at all (its frequencies not done): the
+            # serial compilation then raises it properly (or gives the same numbers).
+            try:
+                fields = shell_soil_field_kernel(*arguments)
+            except Exception:
+                fields = None
+            if fields is None or not np.all(fields[-1]):
+                fields = shell_soil_field_serial(*arguments)
     except ZeroDivisionError:
         raise ValueError(
             "a wavenumber equals the P- or S-wavenumber ω/c of an undamped soil (a branch "
             "point, α or β = 0, where the potentials degenerate); move it slightly or give the "
             "soil a loss factor"
         ) from None
+    fields = fields[:-1]
     for field in fields:
         if not np.all(np.isfinite(field)):
             raise ValueError(
@@ -490,7 +538,7 @@ def invert_stress_2p5d(
 
 
 def invert_response_2p5d(
-    freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics: int
+    freq_hz, wavenumber_rad_per_m, depth_m, tunnel, soil, n_harmonics: int, point_mask=None
 ) -> tuple[np.ndarray, StressField]:
     """Receptance and stresses below the invert from one kernel evaluation.
 
@@ -508,6 +556,9 @@ def invert_response_2p5d(
         Lining and soil.
     n_harmonics : int
         Highest circumferential harmonic N ≥ 0.
+    point_mask : ndarray, optional
+        (n, n_depth) bool: only these (frequency, depth) pairs are computed, the others are 0
+        (default: all).
 
     Returns
     -------
@@ -517,7 +568,7 @@ def invert_response_2p5d(
     omega, xi = paired_inputs(freq_hz, wavenumber_rad_per_m)
     depth = checked_depths(depth_m)
     u_r, s_rr, s_tt, s_xx, s_rx = _run_kernel(
-        omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True
+        omega, xi, depth, tunnel, soil, n_harmonics, with_stresses=True, point_mask=point_mask
     )
     zero = np.zeros_like(s_rr)
     return u_r, StressField(

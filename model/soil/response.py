@@ -47,12 +47,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.fft
-import scipy.sparse
 
+from model.soil.kernel_sampling import (  # noqa: F401 (re-exported: their home until now)
+    KERNEL_STENCIL,
+    depth_sample_bins,
+    depth_sampled_transfer,
+    kernel_interpolation_matrix,
+    kernel_sample_bins,
+    record_grid_transfer,
+)
 from model.soil.moving_load_2p5d import receptance_2p5d
-from model.soil.section_2d import invert_receptance
+from model.soil.section_2d import invert_receptance, use_serial_kernel
 from model.spectra import checked_record, fourier_transform, one_sided_psd
 
 # Output samples per period of the highest retained frequency (see the module docstring).
@@ -63,8 +71,6 @@ TAIL_TRANSIT_TIMES = 2.0
 # Depth below the invert at which the paper quotes its Fig. 11 value (2.94 mm); the summary
 # always reports the peak displacement there (docs/model.md §8).
 COMPARISON_DEPTH_M = 11.0
-# Kernel samples in each interpolation stencil between them (module docstring: kernel sampling).
-KERNEL_STENCIL = 6
 # Rows of histories per inverse FFT call (RecordGrid.time_histories); any count gives the same
 # numbers (each row is transformed alone); 16 is faster than all rows at once on the paper case
 # (benchmarks/bench_pipeline.py, docs/tunnel_soil.md).
@@ -226,19 +232,53 @@ class RecordGrid:
 
     def time_histories(self, spectra: np.ndarray) -> np.ndarray:
         """(n_rows, n_out) histories x(t) = ∫ X(f) e^{i2πft} df of (n_rows, nk) spectra."""
-        n_rows, n_freq = spectra.shape[0], self.f_hz.size
+        return self._inverse_rows(spectra.shape[0], lambda rows: spectra[rows])
+
+    def response_histories(self, transfer: np.ndarray) -> np.ndarray:
+        """(n_columns, n_out) histories of the responses H(f) Q(f) to the grid's load, from
+        (nk, n_columns) transfer functions H (the same numbers as ``time_histories`` of the
+        products, without forming them all)."""
+        load = np.ascontiguousarray(self.load_spectrum)
+        columns = np.ascontiguousarray(transfer)
+        return self._inverse_rows(
+            transfer.shape[1], None, lambda rows, out: _products_into(columns, load, rows, out)
+        )
+
+    def _inverse_rows(self, n_rows: int, spectra_of, fill=None) -> np.ndarray:
+        """Inverse transforms of the rows ``spectra_of(slice)`` gives (or that ``fill(slice,
+        buffer)`` writes into the buffer's first columns), a block at a time."""
+        n_freq = self.f_hz.size
         histories = np.empty((n_rows, self.n_out))
         # A block of rows at a time: one zero-padded buffer that stays in the processor's
         # cache, where all rows at once would allocate and fill (rows × n_out_pad) anew.
         padded = np.zeros((min(n_rows, INVERSE_FFT_ROWS), self.n_out_pad // 2 + 1), dtype=complex)
+        workers = 1 if use_serial_kernel() else numba.get_num_threads()
         for first in range(0, n_rows, INVERSE_FFT_ROWS):
-            block = spectra[first : first + INVERSE_FFT_ROWS]
-            padded[: block.shape[0], :n_freq] = block
-            inverse = scipy.fft.irfft(padded[: block.shape[0]], self.n_out_pad, axis=1)
-            histories[first : first + block.shape[0]] = inverse[:, : self.n_out]
+            rows = slice(first, min(first + INVERSE_FFT_ROWS, n_rows))
+            count = rows.stop - rows.start
+            if fill is None:
+                padded[:count, :n_freq] = spectra_of(rows)
+            else:
+                fill(rows, padded)
+            inverse = scipy.fft.irfft(padded[:count], self.n_out_pad, axis=1, workers=workers)
+            histories[rows] = inverse[:, : self.n_out]
         # Δf · n_out_pad = 1/dt_out turns the inverse DFT into samples of the integral.
         histories /= self.dt_out
         return histories
+
+
+@numba.njit(cache=True)
+def _product_rows(transfer, load, first, count, out):
+    """out[r, k] = transfer[k, first + r] · load[k], r < count (the transposed products)."""
+    for k in range(load.size):
+        q = load[k]
+        for r in range(count):
+            out[r, k] = transfer[k, first + r] * q
+
+
+def _products_into(transfer, load, rows: slice, out) -> None:
+    """The products H(f) Q(f) of the columns ``rows`` of ``transfer`` into ``out``'s rows."""
+    _product_rows(transfer, load, rows.start, rows.stop - rows.start, out)
 
 
 def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float) -> RecordGrid:
@@ -261,24 +301,14 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     """
     load = checked_record(line_load_N_per_m, dt_s)
     n_record = load.size
-    f_max = numerics.soil_max_frequency
-    step = decimation_factor(dt_s, f_max)
+    step, n_out_pad, f_hz = _record_grid_layout(n_record, dt_s, numerics)
     dt_out = step * dt_s
-    n_out_pad = scipy.fft.next_fast_len(
-        math.ceil(numerics.zero_pad_factor * n_record / step), real=True
-    )
-    f_hz, load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)
-    n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
-    if n_keep < 2:
-        raise ValueError(
-            f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
-            f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding"
-        )
+    load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)[1][: f_hz.size].copy()
     record_s = n_record * dt_s
     tail_s = response_tail(numerics.max_depth, s_wave_speed)
     return RecordGrid(
-        f_hz=f_hz[:n_keep],
-        load_spectrum=load_spectrum[:n_keep],
+        f_hz=f_hz,
+        load_spectrum=load_spectrum,
         n_out_pad=n_out_pad,
         dt_out=dt_out,
         n_out=min(n_out_pad, math.ceil((record_s + tail_s) / dt_out)),
@@ -286,122 +316,42 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     )
 
 
-def kernel_sample_bins(
-    n_freq: int, df_hz: float, samples_per_cycle: int, s_wave_speed: float, radius_m: float
-) -> np.ndarray:
-    """Bins of a record's frequency grid at which the tunnel–soil kernel is evaluated.
+def _record_grid_layout(n_record: int, dt_s: float, numerics) -> tuple[int, int, np.ndarray]:
+    """(decimation step k, padded length on the output grid, kept frequencies) of a record."""
+    f_max = numerics.soil_max_frequency
+    step = decimation_factor(dt_s, f_max)
+    n_out_pad = scipy.fft.next_fast_len(
+        math.ceil(numerics.zero_pad_factor * n_record / step), real=True
+    )
+    f_hz = scipy.fft.rfftfreq(step * n_out_pad, dt_s)
+    n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
+    if n_keep < 2:
+        raise ValueError(
+            f"numerics.soil_max_frequency = {f_max:g} Hz is below the frequency "
+            f"step {f_hz[1]:.3g} Hz of the padded record: raise it or the padding"
+        )
+    return step, n_out_pad, f_hz[:n_keep].copy()
 
-    Module docstring, kernel sampling: with s = ⌊c₂/(N r Δf)⌋, every bin below N s, every
-    s-th bin from there, and the last bin; every bin when s ≤ 1 or N = 0.
+
+def record_grid_frequencies(line_load_N_per_m, dt_s: float, numerics) -> np.ndarray:
+    """The frequencies of :func:`padded_record_grid` without transforming the load (Hz).
 
     Parameters
     ----------
-    n_freq : int
-        Bins of the grid, f_k = k Δf, k = 0 … n_freq − 1.
-    df_hz : float
-        Frequency step Δf (Hz), > 0.
-    samples_per_cycle : int
-        N ≥ 6, samples per period c₂/r of the transfer functions; 0 for every bin.
-    s_wave_speed : float
-        Soil shear-wave speed c₂ (m/s).
-    radius_m : float
-        Distance r from the tunnel axis to the deepest output point (m), a + d_max.
+    line_load_N_per_m : array_like
+        Load record (only its length counts).
+    dt_s : float
+        Sampling interval (s), > 0.
+    numerics : model.params.Numerics
+        Uses soil_max_frequency and zero_pad_factor.
 
     Returns
     -------
     ndarray
-        Increasing bin indices, starting at 0 and ending at n_freq − 1.
+        (nk,) 0 … soil_max_frequency, step 1/T_pad, equal to ``padded_record_grid(...).f_hz``.
     """
-    if samples_per_cycle == 0:
-        return np.arange(n_freq)
-    stride = math.floor(s_wave_speed / (samples_per_cycle * radius_m * df_hz))
-    dense = samples_per_cycle * stride
-    if stride <= 1 or dense + KERNEL_STENCIL * stride >= n_freq:
-        return np.arange(n_freq)
-    return np.concatenate([np.arange(dense), np.arange(dense, n_freq - 1, stride), [n_freq - 1]])
-
-
-def kernel_interpolation_matrix(sample_bins, n_freq: int) -> scipy.sparse.csr_array:
-    """Weights that give a transfer function at every bin from its values at the sample bins.
-
-    Row k is 1 at bin k's own sample when k is sampled; otherwise the Lagrange weights of the
-    ``KERNEL_STENCIL`` samples centred on the interval that holds k, never the DC bin (bin 0,
-    a band value, not H(0)).
-
-    Parameters
-    ----------
-    sample_bins : ndarray
-        Increasing bins, from :func:`kernel_sample_bins` (at least ``KERNEL_STENCIL`` + 1).
-    n_freq : int
-        Bins of the grid.
-
-    Returns
-    -------
-    scipy.sparse.csr_array
-        (n_freq, n_samples) real weights.
-    """
-    nodes = np.asarray(sample_bins)
-    between = np.setdiff1d(np.arange(n_freq), nodes)
-    interval = np.searchsorted(nodes, between) - 1  # nodes[interval] < bin < nodes[interval + 1]
-    first = np.clip(interval - (KERNEL_STENCIL // 2 - 1), 1, nodes.size - KERNEL_STENCIL)
-    stencil = first[:, None] + np.arange(KERNEL_STENCIL)
-    x, xs = between[:, None].astype(float), nodes[stencil].astype(float)
-    weights = np.empty(stencil.shape)
-    for m in range(KERNEL_STENCIL):
-        others = np.delete(np.arange(KERNEL_STENCIL), m)
-        weights[:, m] = np.prod((x - xs[:, others]) / (xs[:, [m]] - xs[:, others]), axis=1)
-    rows = np.concatenate([nodes, np.repeat(between, KERNEL_STENCIL)])
-    columns = np.concatenate([np.arange(nodes.size), stencil.ravel()])
-    values = np.concatenate([np.ones(nodes.size), weights.ravel()])
-    return scipy.sparse.csr_array((values, (rows, columns)), shape=(n_freq, nodes.size))
-
-
-def record_grid_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> list[np.ndarray]:
-    """Transfer functions at every frequency of a record grid, row 0 the DC band value.
-
-    The kernel is evaluated at :func:`kernel_sample_bins` and interpolated in between (module
-    docstring, kernel sampling); the DC bin holds Re of the value at Δf/(2e), the band average
-    of A + B ln f (:func:`dc_band_receptance`), evaluated in the same call.
-
-    Parameters
-    ----------
-    f_hz : ndarray
-        (nk,) the grid, f_k = k Δf (:func:`padded_record_grid`).
-    depth_m : ndarray
-        (nd,) depths below the ring–soil interface (m), ≥ 0.
-    evaluate : callable
-        ``evaluate(freq_hz)`` → sequence of complex (n, nd) transfer functions at ``freq_hz``
-        (Hz, > 0), fresh arrays.
-    tunnel, soil : model.params.Tunnel, model.params.Soil
-        Ring radius a and S-wave speed c₂, which set the sampling.
-    numerics : model.params.Numerics
-        Uses kernel_samples_per_cycle.
-
-    Returns
-    -------
-    list of ndarray
-        Complex (nk, nd) transfer functions, in the order ``evaluate`` gives them.
-    """
-    f_hz = np.asarray(f_hz, dtype=float)
-    radius = tunnel.ring_radius + float(np.max(depth_m))
-    bins = kernel_sample_bins(
-        f_hz.size, f_hz[1], numerics.kernel_samples_per_cycle, soil.s_wave_speed, radius
-    )
-    freq = f_hz[bins]
-    freq[0] = 0.5 * f_hz[1] / math.e
-    sampled = evaluate(freq)
-    weights = None if bins.size == f_hz.size else kernel_interpolation_matrix(bins, f_hz.size)
-    transfers = []
-    for values in sampled:
-        values[0] = values[0].real
-        if weights is None:
-            transfers.append(values)
-        elif not values.any():  # a component that vanishes under the invert
-            transfers.append(np.zeros((f_hz.size, values.shape[1]), dtype=complex))
-        else:  # real weights: the real and imaginary parts are interpolated alike
-            pairs = np.ascontiguousarray(values).view(float)
-            transfers.append(np.ascontiguousarray(weights @ pairs).view(complex))
-    return transfers
+    n_record = checked_record(line_load_N_per_m, dt_s).size
+    return _record_grid_layout(n_record, dt_s, numerics)[2]
 
 
 def soil_response(
@@ -431,10 +381,10 @@ def soil_response(
     """
     grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, soil.s_wave_speed)
     depth = output_depths(numerics)
-    (receptance,) = record_grid_transfer(
+    (receptance,) = depth_sampled_transfer(
         grid.f_hz,
         depth,
-        lambda freq: (
+        lambda freq, depth, _: (  # every point: the mask only saves work
             section_receptance(freq, depth, tunnel, soil, numerics.n_harmonics, speed_m_s),
         ),
         tunnel,
@@ -480,8 +430,7 @@ def displacement_response(grid: RecordGrid, depth_m, receptance, numerics) -> So
     SoilResponse
     """
     f_hz, load_spectrum = grid.f_hz, grid.load_spectrum
-    disp_spectrum = (receptance * load_spectrum[:, None]).T
-    disp = grid.time_histories(disp_spectrum)
+    disp = grid.response_histories(receptance)
     n_out, dt_out = grid.n_out, grid.dt_out
 
     n_record_out = max(2, min(n_out, round(grid.record_s / dt_out)))
@@ -495,6 +444,6 @@ def displacement_response(grid: RecordGrid, depth_m, receptance, numerics) -> So
         t_s=np.arange(n_out) * dt_out,
         disp_m=disp,
         interface_spectrum_f_hz=f_hz,
-        interface_amplitude_m_per_hz=np.abs(disp_spectrum[0]),
+        interface_amplitude_m_per_hz=np.abs(receptance[:, 0] * load_spectrum),
         line_load_amplitude_N_per_m_per_hz=np.abs(load_spectrum),
     )

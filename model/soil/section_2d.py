@@ -136,6 +136,7 @@ def _ring_soil_field(
     lame,
     density,
     with_stresses,
+    point_mask,
 ):
     """Soil field of a radially loaded ring in a full-space, summed over harmonics.
 
@@ -145,7 +146,8 @@ def _ring_soil_field(
     (u_θ, σ_rθ), X_n being the radial function of harmonic n per unit p_n (1 Pa).
 
     Parameters: omega (nf,) rad/s > 0; radius (np,) m ≥ a; weights (np, n_max + 1);
-    shear = μ*, lame = λ* complex (Pa); density (kg/m³); with_stresses: compute σ or leave 0.
+    shear = μ*, lame = λ* complex (Pa); density (kg/m³); with_stresses: compute σ or leave 0;
+    point_mask (nf, np) bool: the points to compute at each frequency (the others left 0).
     Returns u_r, u_θ, σ_rr, σ_θθ, σ_rθ, each complex (nf, np).
     """
     n_freq = omega.size
@@ -208,6 +210,8 @@ def _ring_soil_field(
             inv_ratio_p_a[n] = 1.0 / ratio_p_a[n]
             inv_ratio_s_a[n] = 1.0 / ratio_s_a[n]
         for j in range(n_points):
+            if not point_mask[i, j]:
+                continue
             r = radius[j]
             # e_P = K_n(αr)/K_n(αa) and R_n(αr) = K_{n+1}/K_n, advanced in n below (e_S alike)
             e_p, ratio_p, two_over_zp = radial_start(alpha, r, a, k0p_a)
@@ -284,6 +288,12 @@ ring_soil_field_serial = numba.njit(cache=True, nogil=True)(
 )
 
 
+def use_serial_kernel() -> bool:
+    """True where the kernels' serial compilations run: one Numba thread, or a process forked
+    after this module was imported (see above)."""
+    return numba.get_num_threads() == 1 or os.getpid() != _IMPORTING_PROCESS
+
+
 # ---- public wrappers --------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SoilField:
@@ -325,12 +335,16 @@ def _check_radius(radius_m, ring_radius: float) -> np.ndarray:
     return radius
 
 
-def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stresses):
-    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError)."""
+def _run_kernel(
+    omega, radius, cos_weight, sin_weight, tunnel, soil, with_stresses, point_mask=None
+):
+    """Unpack the parameter objects and run the kernel; refuse a non-finite result (ValueError).
+    ``point_mask`` (n_freq, n_points) bool: the points to compute (default all)."""
+    if point_mask is None:
+        point_mask = np.ones((omega.size, radius.size), dtype=bool)
     a, mass, extensional, bending = ring_constants(tunnel)
     shear, lame, density = soil_constants(soil)
-    serial = numba.get_num_threads() == 1 or os.getpid() != _IMPORTING_PROCESS
-    kernel = ring_soil_field_serial if serial else ring_soil_field_kernel
+    kernel = ring_soil_field_serial if use_serial_kernel() else ring_soil_field_kernel
     fields = kernel(
         omega,
         radius,
@@ -344,6 +358,7 @@ def _run_kernel(omega, radius, cos_weight, sin_weight, tunnel, soil, with_stress
         lame,
         density,
         with_stresses,
+        np.ascontiguousarray(point_mask, dtype=bool),
     )
     for field in fields:
         bad = ~np.isfinite(field)
@@ -396,7 +411,9 @@ def invert_receptance(freq_hz, depth_m, tunnel, soil, n_harmonics: int) -> np.nd
     return u_r
 
 
-def soil_field(freq_hz, radius_m, theta_rad, tunnel, soil, n_harmonics: int) -> SoilField:
+def soil_field(
+    freq_hz, radius_m, theta_rad, tunnel, soil, n_harmonics: int, point_mask=None
+) -> SoilField:
     """Soil displacements and stresses per unit downward line load at the invert.
 
     Parameters
@@ -410,6 +427,9 @@ def soil_field(freq_hz, radius_m, theta_rad, tunnel, soil, n_harmonics: int) -> 
         Lining and soil.
     n_harmonics : int
         Highest circumferential harmonic N ≥ 0.
+    point_mask : ndarray, optional
+        (n_freq, n_points) bool: only these (frequency, point) pairs are computed, the others
+        are 0 (default: all).
 
     Returns
     -------
@@ -430,6 +450,7 @@ def soil_field(freq_hz, radius_m, theta_rad, tunnel, soil, n_harmonics: int) -> 
         tunnel,
         soil,
         with_stresses=True,
+        point_mask=point_mask,
     )
     return SoilField(*fields)
 

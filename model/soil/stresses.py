@@ -30,13 +30,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from model.longterm.cycles import range_weighted_cycles
+from model.soil.kernel_sampling import depth_sampled_transfer
 from model.soil.moving_load_2p5d import StressField, invert_response_2p5d
 from model.soil.response import (
     SoilResponse,
     displacement_response,
     output_depths,
     padded_record_grid,
-    record_grid_transfer,
+    record_grid_frequencies,
 )
 from model.soil.section_2d import soil_field
 
@@ -82,15 +83,18 @@ def plane_strain_stress_transfer(freq_hz, depth_m, tunnel, soil, n_harmonics: in
     return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics)[1]
 
 
-def _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics: int):
-    """(receptance, StressField) under the invert from one 2D kernel evaluation."""
+def _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics: int, mask=None):
+    """(receptance, StressField) under the invert from one 2D kernel evaluation (``mask``: the
+    (frequency, depth) pairs to compute, default all)."""
     depth = np.atleast_1d(np.asarray(depth_m, dtype=float))
     if np.any(depth < 0.0):
         raise ValueError(
             f"depth_m = {float(depth[depth < 0.0][0])!r} is inside the lining: depths are "
             "measured from the ring–soil interface and must be ≥ 0 m"
         )
-    field = soil_field(freq_hz, tunnel.ring_radius + depth, 0.0, tunnel, soil, n_harmonics)
+    field = soil_field(
+        freq_hz, tunnel.ring_radius + depth, 0.0, tunnel, soil, n_harmonics, point_mask=mask
+    )
     shear = soil.shear_modulus * (1.0 + 1j * soil.shear_loss_factor)
     lame = soil.bulk_modulus * (1.0 + 1j * soil.bulk_loss_factor) - 2.0 * shear / 3.0
     axial = lame / (2.0 * (lame + shear)) * (field.sigma_rr + field.sigma_thetatheta)
@@ -125,7 +129,7 @@ def stress_transfer(freq_hz, depth_m, scenario) -> StressField:
     return invert_transfer(freq_hz, depth_m, scenario)[1]
 
 
-def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField]:
+def invert_transfer(freq_hz, depth_m, scenario, mask=None) -> tuple[np.ndarray, StressField]:
     """Receptance and stresses under the invert per unit line load, one kernel evaluation.
 
     The receptance is :func:`model.soil.response.section_receptance`'s and the stresses
@@ -140,6 +144,8 @@ def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField
         Depths d ≥ 0 below the ring–soil interface (m).
     scenario : model.params.Scenario
         Uses tunnel, soil, numerics.n_harmonics and (2.5D model) train.speed.
+    mask : ndarray, optional
+        (n_freq, n_depth) bool: the pairs to compute; the others are 0 (default: all).
 
     Returns
     -------
@@ -150,19 +156,19 @@ def invert_transfer(freq_hz, depth_m, scenario) -> tuple[np.ndarray, StressField
     if tunnel.model == "2.5d":  # the moving train: the kernel at ξ = ω/v (docs/model.md §9)
         freq = np.atleast_1d(np.asarray(freq_hz, dtype=float))
         wavenumber = 2.0 * np.pi * freq / scenario.train.speed
-        return invert_response_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics)
-    return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics)
+        return invert_response_2p5d(freq, wavenumber, depth_m, tunnel, soil, n_harmonics, mask)
+    return _plane_strain_invert_field(freq_hz, depth_m, tunnel, soil, n_harmonics, mask)
 
 
 def _grid_transfer(f_hz, depth, scenario) -> tuple[np.ndarray, StressField]:
     """:func:`invert_transfer` on a record grid, row 0 the DC band value (module docstring,
     step 2), by :func:`model.soil.response.record_grid_transfer` like the displacements."""
 
-    def evaluate(freq):
-        receptance, stresses = invert_transfer(freq, depth, scenario)
+    def evaluate(freq, depth, mask):
+        receptance, stresses = invert_transfer(freq, depth, scenario, mask)
         return receptance, *stress_components(stresses)
 
-    receptance, *components = record_grid_transfer(
+    receptance, *components = depth_sampled_transfer(
         f_hz, depth, evaluate, scenario.tunnel, scenario.soil, scenario.numerics
     )
     return receptance, StressField(**dict(zip(STRESS_COMPONENTS, components, strict=True)))
@@ -275,10 +281,10 @@ def section_transfer(line_load_N_per_m, dt_s: float, scenario) -> SectionTransfe
     SectionTransfer
     """
     numerics = scenario.numerics
-    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    f_hz = record_grid_frequencies(line_load_N_per_m, dt_s, numerics)
     depth = output_depths(numerics)
-    receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
-    return SectionTransfer(grid.f_hz, depth, receptance, stresses)
+    receptance, stresses = _grid_transfer(f_hz, depth, scenario)
+    return SectionTransfer(f_hz, depth, receptance, stresses)
 
 
 def section_response(
@@ -331,17 +337,13 @@ def section_response(
 def _deviator_response(grid, depth, stresses: StressField) -> StressResponse:
     """Deviator histories, peaks and rainflow counts from stress transfer functions on a grid.
 
-    Components that vanish identically (σ_rθ, σ_θx at θ = 0; σ_rx in 2D) are not transformed;
-    the others go through one batched inverse FFT.
+    Components that vanish identically (σ_rθ, σ_θx at θ = 0; σ_rx in 2D) are not transformed.
     """
-    components = stress_components(stresses)
-    nonzero = [k for k, component in enumerate(components) if np.any(component)]
-    spectra = np.stack([components[k] for k in nonzero]) * grid.load_spectrum[:, None]
-    n_depth = depth.size
-    transformed = grid.time_histories(spectra.transpose(0, 2, 1).reshape(-1, grid.f_hz.size))
-    histories = [np.zeros((n_depth, grid.n_out))] * len(components)
-    for row, k in enumerate(nonzero):
-        histories[k] = transformed[row * n_depth : (row + 1) * n_depth]
+    zero = np.zeros((depth.size, grid.n_out))
+    histories = [
+        grid.response_histories(component) if np.any(component) else zero
+        for component in stress_components(stresses)
+    ]
     deviator = deviator_stress(*histories)
     return StressResponse(
         depth_m=depth,
