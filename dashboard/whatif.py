@@ -476,8 +476,9 @@ def read_session(text: str | bytes) -> SessionFile:
     Raises
     ------
     ValueError
-        Not JSON, not a session file (format tag), an unknown version, a malformed entry, or a
-        scenario value out of range (the message names the run and the parameter).
+        Not JSON (or nested too deeply), not a session file (format tag), an unknown version, a
+        malformed entry, or a scenario value out of range (the message names the run and the
+        parameter).
     """
     if isinstance(text, bytes):
         try:
@@ -488,6 +489,8 @@ def read_session(text: str | bytes) -> SessionFile:
         data = json.loads(text)
     except json.JSONDecodeError as error:
         raise ValueError(f"not a session file: not valid JSON ({error})") from None
+    except RecursionError:
+        raise ValueError("not a session file: its JSON is nested too deeply") from None
     if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:
         raise ValueError(
             f"not a session file: the format tag is not {SESSION_FORMAT!r} (a scenario file is "

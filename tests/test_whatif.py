@@ -328,6 +328,7 @@ def _session_text(**changes):
     "text, message",
     [
         ("{not json", "not valid JSON"),
+        ("[" * 100_000 + "]" * 100_000, "nested too deeply"),  # Python's parser recurses
         (b"\xff\xfe", "not UTF-8"),
         (Scenario.paper().to_json(), "format tag is not 'tunnelsettle-whatif-session'"),
         ("[1, 2]", "format tag"),
