@@ -3,6 +3,8 @@ profile file is refused before it is parsed, with its size and the limit."""
 
 from __future__ import annotations
 
+import pytest
+
 from dashboard import limits
 from dashboard.app import Dashboard
 from dashboard.longterm_view import CalibrationPanel
@@ -43,3 +45,29 @@ def test_oversized_borehole_and_triaxial_csv_are_refused():
     calibration = CalibrationPanel()
     calibration.load_text("0" * (limits.TRIAXIAL_CSV_BYTES + 1), "cyclic.csv")
     assert "cyclic.csv is 3.0 MB" in calibration.message.object and calibration.fit is None
+
+
+TRIAXIAL_HEADER = "n_cycles,strain_percent,deviator_kPa,strength_kPa\n"
+BINARY = bytes(range(256)) * 64  # holds NUL bytes, as binary files do
+HUGE_FIELD = "9" * 200_000  # beyond the CSV reader's field limit (131 072), under 3 MB
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (BINARY, "data.csv: not a CSV text file (it holds NUL characters: binary data)"),
+        (
+            (TRIAXIAL_HEADER + f"1,{HUGE_FIELD},10,50\n").encode(),
+            "data.csv: line 2 cannot be read as CSV (field larger than field limit",
+        ),
+    ],
+)
+def test_a_binary_or_huge_field_csv_upload_is_refused_in_one_line(content, message):
+    """Python's CSV reader raised csv.Error out of the upload callbacks (issue 29)."""
+    table = LayerTable(site=Site())
+    layers_before = list(table.site.layers)
+    table.upload.param.update(filename="data.csv", value=content)
+    assert message in table.message.object and list(table.site.layers) == layers_before
+    calibration = CalibrationPanel()
+    calibration.file_input.param.update(filename="data.csv", value=content)
+    assert message in calibration.message.object and calibration.fit is None

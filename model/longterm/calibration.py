@@ -11,8 +11,6 @@ example ``model/data/triaxial_synthetic.csv`` is synthetic and labelled so.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import scipy.optimize
 
+from model.params.borehole import csv_lines
 from model.params.quantities import _format_range
 from model.params.site import Layer
 
-COMMENT = "#"
 N_LAW_PARAMETERS = 3  # a, b, m
 STRESS_UNITS = {"kpa": 1.0, "pa": 1e-3, "mpa": 1e3}  # → kPa
 PERCENT_UNITS = {"percent": 1.0, "%": 1.0, "pct": 1.0}
@@ -296,7 +294,8 @@ def load_triaxial_csv(path) -> TriaxialData:
     Raises
     ------
     ValueError
-        A header that is missing, names an unknown column or lacks a required one or a unit;
+        Binary content or a line the CSV reader cannot read (:func:`csv_lines`); a header
+        that is missing, names an unknown column or lacks a required one or a unit;
         bad rows (with the file name, line numbers and columns); or data from which a, b, m
         cannot be fitted (fewer than 4 points, non-positive values, a single stress level).
     """
@@ -318,12 +317,7 @@ def parse_triaxial_csv(text: str, source: str = "triaxial data") -> TriaxialData
     -------
     TriaxialData
     """
-    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark would hide the first name
-    lines = [
-        (number, fields)
-        for number, fields in enumerate(csv.reader(io.StringIO(text)), start=1)
-        if fields and "".join(fields).strip() and not fields[0].lstrip().startswith(COMMENT)
-    ]
+    lines = csv_lines(text, source)
     if not lines:
         raise ValueError(f"{source}: no header and 0 points; the header names {HEADER_HELP}")
     header_line, header = lines[0]

@@ -79,6 +79,39 @@ def _column(text: str, position: int, line: int, source: str) -> tuple[str, floa
     )
 
 
+def csv_lines(text: str, source: str) -> list[tuple[int, list[str]]]:
+    """(line number, fields) of every line of CSV text that is neither blank nor a comment.
+
+    Parameters
+    ----------
+    text : str
+        Contents of the file; a UTF-8 byte-order mark is dropped.
+    source : str
+        Name used in error messages (e.g. the uploaded file's name).
+
+    Raises
+    ------
+    ValueError
+        Binary content (NUL characters) or a line Python's CSV reader cannot read (a field
+        longer than its limit, a stray carriage return), naming the line.
+    """
+    if "\x00" in text:
+        raise ValueError(f"{source}: not a CSV text file (it holds NUL characters: binary data)")
+    reader = csv.reader(io.StringIO(text.removeprefix("\ufeff")))
+    lines = []
+    try:
+        for fields in reader:
+            if fields and "".join(fields).strip() and not fields[0].lstrip().startswith(COMMENT):
+                lines.append((reader.line_num, fields))
+    except csv.Error as error:
+        reason = str(error).split(" - ")[0]  # drop the reader's hint about file modes
+        raise ValueError(
+            f"{source}: line {reader.line_num} cannot be read as CSV ({reason}); save the data "
+            "as a plain-text CSV file"
+        ) from None
+    return lines
+
+
 def parse_borehole_csv(text: str, source: str = "borehole") -> list[Layer]:
     """Layers from the text of a borehole CSV (format in the module docstring).
 
@@ -97,15 +130,11 @@ def parse_borehole_csv(text: str, source: str = "borehole") -> list[Layer]:
     Raises
     ------
     ValueError
-        No header, an unknown column or unit, a required column missing, no layer, a cell that
-        is not a number, or a value outside its bounds; each naming the line and the column.
+        Binary content or a line the CSV reader cannot read (:func:`csv_lines`); no header, an
+        unknown column or unit, a required column missing, no layer, a cell that is not a
+        number, or a value outside its bounds; each naming the line and the column.
     """
-    text = text.removeprefix("\ufeff")
-    lines = [
-        (number, fields)
-        for number, fields in enumerate(csv.reader(io.StringIO(text)), start=1)
-        if fields and "".join(fields).strip() and not fields[0].lstrip().startswith(COMMENT)
-    ]
+    lines = csv_lines(text, source)
     if not lines:
         raise ValueError(f"{source}: no header and no layer")
     header_line, header = lines[0]
