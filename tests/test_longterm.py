@@ -14,7 +14,12 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from model.cli import main
-from model.longterm.calibration import fit_strain_law, load_triaxial_csv, parse_triaxial_csv
+from model.longterm.calibration import (
+    fit_pore_pressure_law,
+    fit_strain_law,
+    load_triaxial_csv,
+    parse_triaxial_csv,
+)
 from model.longterm.cycles import range_weighted_cycles
 from model.longterm.geostatic import check_longterm_inputs, static_state
 from model.longterm.settlement import (
@@ -777,3 +782,15 @@ def test_fit_refuses_unidentifiable_data():
         fit_strain_law([1, 2, 3, 4], [0.1, 0.0, 0.2, 0.3], [0.1, 0.2, 0.1, 0.2])
     with pytest.raises(ValueError, match="same cycle number"):
         fit_strain_law([5, 5, 5, 5], [0.1, 0.2, 0.2, 0.3], [0.1, 0.2, 0.3, 0.4])
+
+
+@pytest.mark.parametrize("relative_spread", [1e-15, 1e-10])
+def test_fit_refuses_stress_ratios_that_barely_differ(relative_spread):
+    """Two stress levels 1e-15 apart gave a = 0.83 ± nan (issue 29): (XᵀX)⁻¹ has no correct
+    digit once cond(X)² exceeds 1/ε, and the fit says the data cannot determine it."""
+    cycles, strain, ratio = _synthetic(0.64, 0.10, 1.7, 0.02, 0)
+    ratio = np.where(ratio < 0.5, 0.2, 0.2 * (1.0 + relative_spread))
+    with pytest.raises(ValueError, match="the points cannot determine the three constants"):
+        fit_strain_law(cycles, strain, ratio)
+    with pytest.raises(ValueError, match="the points cannot determine the three constants"):
+        fit_pore_pressure_law(cycles, strain / 100.0, ratio)

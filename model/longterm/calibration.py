@@ -107,12 +107,26 @@ def _log_linear_fit(cycles, values, ratio) -> tuple[np.ndarray, np.ndarray, floa
     """Least squares of log y = c0 + c1 log(ratio) + c2 log N: coefficients, errors, s and
     the coefficients' covariance s² (XᵀX)⁻¹."""
     design = np.column_stack([np.ones_like(cycles), np.log(ratio), np.log(cycles)])
+    if _ill_conditioned(design):
+        raise ValueError(
+            "calibration data: the points cannot determine the three constants (their standard "
+            "errors would be undefined): the stress ratios q_d/σ_s or the cycle numbers N barely "
+            "differ, or vary together; add tests at a second stress level and values read at "
+            "other cycle numbers"
+        )
     target = np.log(values)
     coefficients, *_ = np.linalg.lstsq(design, target, rcond=None)
     residual = target - design @ coefficients
     variance = float(residual @ residual) / (cycles.size - N_LAW_PARAMETERS)
     covariance = variance * np.linalg.inv(design.T @ design)
     return coefficients, np.sqrt(np.diag(covariance)), math.sqrt(variance), covariance
+
+
+def _ill_conditioned(design: np.ndarray) -> bool:
+    """Whether (XᵀX)⁻¹ of the columns scaled to unit length has no correct digit: the
+    condition number of XᵀX, cond(X)², beyond 1/ε of double precision."""
+    scaled = design / np.linalg.norm(design, axis=0)
+    return bool(np.linalg.cond(scaled) ** 2 * np.finfo(float).eps > 1.0)
 
 
 def _refuse_implausible(fit: dict[str, float], layer_names: dict[str, str], law: str) -> None:
@@ -162,9 +176,11 @@ def fit_strain_law(n_cycles, strain_percent, stress_ratio) -> dict[str, float]:
     Raises
     ------
     ValueError
-        Fewer than 4 points, non-positive values, a single stress level or a single N; or
-        fitted constants outside the bounds of the layer's a (0, 100] %, b (0, 1), m (0, 10]
-        (strains that do not grow with N, swapped columns), with the reason.
+        Fewer than 4 points, non-positive values, a single stress level or a single N, or
+        points that cannot determine the constants (stress ratios or cycle numbers that barely
+        differ or vary together); or fitted constants outside the bounds of the layer's
+        a (0, 100] %, b (0, 1), m (0, 10] (strains that do not grow with N, swapped columns),
+        with the reason.
     """
     cycles, strain, ratio = _check_calibration_data(
         n_cycles, strain_percent, stress_ratio, "calibration data"
