@@ -43,12 +43,13 @@ N_RAILS = 2  # both rails load the same tunnel section (docs/model.md §6)
 # FFT's rounding and the tail's truncation leave ripples orders of magnitude below this).
 INVARIANT_TOLERANCE = 1e-6
 
-# Numerics parameters read by each stage; together they must cover every Numerics parameter
-# (checked by the tests), so that no setting is silently left out of a cache key.
+# Numerics parameters read by each stage; with WAVENUMBER_NUMERICS they must cover every
+# Numerics parameter (checked by the tests), so that no setting is silently left out of a key.
 VEHICLE_TRACK_NUMERICS = ("dt", "n_rail_modes", "rail_end_margin", "approach_distance")
 LOAD_NUMERICS = ("psd_segment",)
-# Numerics of the 2.5D model's wavenumber integral (model.soil.point_load.point_load_response):
-# in the soil key only when tunnel.model is "2.5d", so they never invalidate a 2D result.
+# Numerics of the wavenumber integral of the point-load response
+# (model.soil.point_load.point_load_response), which no stage calls (the 2.5D soil stage
+# evaluates the kernel at ξ = ω/v): in no key, so a change never forces a recompute.
 WAVENUMBER_NUMERICS = ("n_wavenumbers", "max_wavenumber", "wavenumber_tolerance")
 # Numerics of the ground-surface results of the half-space model: in the soil key only when
 # tunnel.ground is "half_space".
@@ -61,7 +62,6 @@ SOIL_NUMERICS = (
     "max_depth",
     "n_depths",
     "kernel_samples_per_cycle",
-    *WAVENUMBER_NUMERICS,
     *GROUND_NUMERICS,
 )
 
@@ -293,10 +293,7 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
         },
         "soil": data["soil"],
         "numerics": pick(
-            name
-            for name in SOIL_NUMERICS
-            if (moving_load or name not in WAVENUMBER_NUMERICS)
-            and (half_space or name not in GROUND_NUMERICS)
+            name for name in SOIL_NUMERICS if half_space or name not in GROUND_NUMERICS
         ),
     }
     if moving_load:  # the 2.5D kernel is evaluated at ξ = ω/v

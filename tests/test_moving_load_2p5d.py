@@ -458,20 +458,38 @@ def test_pipeline_evaluates_the_2p5d_kernel_at_the_moving_load_wavenumber(cheap_
     assert abs(flat.peak_disp_m[0] / soil.peak_disp_m[0] - 1) > 0.05
 
 
-def test_soil_cache_key_follows_model_speed_and_wavenumber_numerics():
-    """The soil key changes with tunnel.model; for 2.5D also with the speed and the wavenumber
-    numerics, which leave a 2D key unchanged."""
+def test_soil_cache_key_follows_model_and_speed_not_wavenumber_numerics():
+    """The soil key changes with tunnel.model, and for 2.5D with the speed; the numerics of the
+    point-load wavenumber integral, which no stage reads, leave the 2D and the 2.5D keys as they
+    were (they made every 2.5D stage from the soil on recompute, issue 29)."""
     scenario = Scenario.paper()
-    key_2d = pipeline.stage_keys(scenario)["soil"]
+    keys_2d = pipeline.stage_keys(scenario)
     scenario.numerics.n_wavenumbers = 1024
-    assert pipeline.stage_keys(scenario)["soil"] == key_2d
+    assert pipeline.stage_keys(scenario) == keys_2d
     scenario.tunnel.model = "2.5d"
-    key_3d = pipeline.stage_keys(scenario)["soil"]
-    assert key_3d != key_2d
+    keys_3d = pipeline.stage_keys(scenario)
+    assert keys_3d["soil"] != keys_2d["soil"]
     scenario.numerics.max_wavenumber = 40.0
-    assert pipeline.stage_keys(scenario)["soil"] != key_3d
+    scenario.numerics.wavenumber_tolerance *= 10.0
+    assert pipeline.stage_keys(scenario) == keys_3d
+    scenario.train.speed_kmh += 10.0
+    assert pipeline.stage_keys(scenario)["soil"] != keys_3d["soil"]
     for name in pipeline.WAVENUMBER_NUMERICS:
-        assert name in pipeline.SOIL_NUMERICS and name in Numerics.param
+        assert name not in pipeline.SOIL_NUMERICS and name in Numerics.param
+
+
+def test_the_wavenumber_numerics_change_no_result_of_a_2p5d_run(cheap_scenario):
+    """What keeps them out of the keys safe: a 2.5D run without a cache gives the same summary
+    and peak profile, bit for bit, with the wavenumber numerics halved, doubled, loosened."""
+    scenario = cheap_scenario()
+    scenario.tunnel.model = "2.5d"
+    before = pipeline.run(scenario, cache=None)
+    scenario.numerics.n_wavenumbers //= 2
+    scenario.numerics.max_wavenumber *= 2.0
+    scenario.numerics.wavenumber_tolerance *= 10.0
+    after = pipeline.run(scenario, cache=None)
+    assert after.summary() == before.summary()
+    np.testing.assert_array_equal(after.soil.peak_disp_m, before.soil.peak_disp_m)
 
 
 def test_speed_at_or_above_the_shear_wave_speed_is_computed_with_a_warning():
