@@ -37,7 +37,7 @@ from model.longterm.calibration import (
     fit_strain_law,
     parse_triaxial_csv,
 )
-from model.longterm.statements import SETTLEMENT_COVERS
+from model.longterm.statements import OUTSIDE_LAW_RANGE, SETTLEMENT_COVERS
 from model.params import Layer, LongTerm, Site
 from model.pipeline import Results
 
@@ -135,7 +135,8 @@ def law_statement(results: Results) -> str:
         f"**Law:** {lt.statement}",
         f"**{lt.pore_pressure_statement.partition(':')[0]}:**"
         f"{lt.pore_pressure_statement.partition(':')[2]}",
-        f"**Settlement at the invert after {results.scenario.longterm.years:g} years:** "
+        f"**Settlement at the invert after {results.scenario.longterm.years:g} years"
+        f"{f' ({OUTSIDE_LAW_RANGE})' if lt.outside_law_range else ''}:** "
         f"{lt.settlement_m[-1] * MM:.3g} mm = {lt.plastic_settlement_m[-1] * MM:.3g} mm plastic "
         f"+ {lt.consolidation_settlement_m[-1] * MM:.3g} mm consolidation; 90 % of it within "
         f"{depth90} below the invert; q_d at the invert {lt.deviator_Pa[0] * KPA:.3g} kPa "

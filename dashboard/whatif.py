@@ -187,6 +187,8 @@ COMPARED = (
     ComparedQuantity("longterm_settlement_m", "Long-term settlement", "mm", 1e3),
     ComparedQuantity("longterm_plastic_settlement_m", "… plastic part", "mm", 1e3),
     ComparedQuantity("longterm_consolidation_settlement_m", "… consolidation part", "mm", 1e3),
+    # at or above 1 the settlement is outside the strain laws' range (Results.summary)
+    ComparedQuantity("longterm_stress_ratio_max", "Largest q_d/σ_s below the invert", "-", 1.0),
 )
 """Key numbers compared, in column order; a quantity absent from every summary is left out
 (the long-term settlement exists only once the pipeline computes it)."""

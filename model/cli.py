@@ -23,7 +23,7 @@ import warnings
 from pathlib import Path
 
 from model.commands import MODEL_SUBCOMMANDS, subcommand_help
-from model.longterm.statements import SETTLEMENT_COVERS
+from model.longterm.statements import OUTSIDE_LAW_RANGE, SETTLEMENT_COVERS
 from model.outputs import (
     check_output_folder,
     replacing_folder,
@@ -294,7 +294,8 @@ def run_main(
             f"at {COMPARISON_DEPTH_M:g} m {summary['peak_disp_11m_m'] * 1e3:.2f} mm; "
             "long-term settlement after "
             f"{scenario.longterm.years:g} years {summary['longterm_settlement_m'] * 1e3:.2f} mm "
-            f"({SETTLEMENT_COVERS}); "
+            f"({SETTLEMENT_COVERS}"
+            f"{f'; {OUTSIDE_LAW_RANGE}' if results.longterm.outside_law_range else ''}); "
             f"{len(paths)} files in {args.out}"
         )
     return 0

@@ -121,7 +121,9 @@ class Results:
         return Scenario.from_json(self.scenario_json)
 
     def summary(self) -> dict[str, float]:
-        """Key numbers in SI units (N, N/m, m, m/s, Pa)."""
+        """Key numbers in SI units (N, N/m, m, m/s, Pa); ``longterm_stress_ratio_max``, the
+        largest q_d/σ_s of the long-term column, at or above 1 says that the long-term
+        settlement is outside the strain laws' range."""
         vt, soil = self.vehicle_track, self.soil
         scenario = self.scenario
         depth, peak = soil.depth_m, soil.peak_disp_m
@@ -141,6 +143,7 @@ class Results:
             "soil_shear_modulus_Pa": scenario.soil.shear_modulus,
             "deviator_invert_Pa": float(self.longterm.deviator_Pa[0]),
             "strength_invert_Pa": float(self.longterm.strength_Pa[0]),
+            "longterm_stress_ratio_max": float(np.max(self.longterm.stress_ratio)),
             "longterm_settlement_m": float(self.longterm.settlement_m[-1]),
             "longterm_plastic_settlement_m": float(self.longterm.plastic_settlement_m[-1]),
             "longterm_consolidation_settlement_m": float(

@@ -616,6 +616,8 @@ def test_summary_and_result_fields(results):
     summary = results.summary()
     lt = results.longterm
     assert summary["deviator_invert_Pa"] == lt.deviator_Pa[0]
+    assert summary["longterm_stress_ratio_max"] == np.max(lt.stress_ratio) < 1.0
+    assert not lt.outside_law_range
     assert summary["longterm_settlement_m"] == lt.settlement_m[-1] > 0
     assert 0 < summary["longterm_depth90_m"] <= lt.depth_m[-1]
     assert lt.years[0] == pytest.approx(1 / 365) and lt.years[-1] == results.scenario.longterm.years

@@ -8,6 +8,7 @@ import pytest
 from dashboard import longterm_view as view
 from dashboard import site_view
 from model.longterm.calibration import load_triaxial_csv
+from model.longterm.statements import OUTSIDE_LAW_RANGE
 from model.params import DATA_DIR, LongTerm, Site
 from model.pipeline import run
 
@@ -82,6 +83,10 @@ def test_statement_names_law_parameters_results_and_warnings(results):
     failing = run(scenario, cache=None)
     assert "⚠" in view.law_statement(failing)
     assert any("not valid near failure" in warning for warning in failing.warnings)
+    # the settlement is flagged where it is shown, not left to stand (issue 29)
+    assert OUTSIDE_LAW_RANGE not in text and results.summary()["longterm_stress_ratio_max"] < 1
+    assert f"years ({OUTSIDE_LAW_RANGE}):** " in view.law_statement(failing)
+    assert failing.summary()["longterm_stress_ratio_max"] >= 1.0
     *_, failure_line = _of_type(view.stress_ratio_depth_plot(failing), hv.Curve)
     assert failure_line.label == "failure (laws not valid)"
     np.testing.assert_array_equal(failure_line.dimension_values("stress_ratio"), [1.0, 1.0])

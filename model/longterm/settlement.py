@@ -177,6 +177,11 @@ class LongTermResult:
         """(nd,) q_d/σ_s."""
         return self.deviator_Pa / self.strength_Pa
 
+    @property
+    def outside_law_range(self) -> bool:
+        """Whether q_d ≥ σ_s somewhere in the column, where the strain laws do not hold."""
+        return bool(np.any(self.deviator_Pa >= self.strength_Pa))
+
 
 def long_term_settlement(stress: StressResponse, scenario) -> LongTermResult:
     """Static state, cycles, laws, consolidation and settlement over service time.

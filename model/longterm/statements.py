@@ -18,6 +18,8 @@ SETTLEMENT_COVERS = (
     "not construction, leakage or regional subsidence"
 )
 """What every long-term settlement of this program covers, said wherever one is shown."""
+OUTSIDE_LAW_RANGE = "outside the strain laws' range: q_d reaches σ_s below the invert"
+"""Said with a long-term settlement wherever q_d/σ_s ≥ 1 somewhere in its column."""
 UNIT_WEIGHT_TOLERANCE = 0.10  # host layer γ against s.soil's ρ g (docs/model.md §14)
 POWER_CONSTANTS = ("a_u", "b_u", "m_u", "r_u_max")
 HYPERBOLIC_CONSTANTS = ("alpha_u", "beta_u", "m_u", "r_u_max")
