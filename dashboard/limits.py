@@ -29,3 +29,24 @@ def refuse_oversized(data: bytes | str, what: str, limit_bytes: int) -> None:
             f"{what} is {size / MEGABYTE:.1f} MB; the server accepts at most "
             f"{limit_bytes / MEGABYTE:.1f} MB"
         )
+
+
+def whole_number_input(widget) -> int:
+    """The value of a whole-number input (``pn.widgets.IntInput``), checked on the server.
+
+    The browser keeps a typed value within the input's ``start`` and ``end``; a message sent to
+    the server's websocket by other means need not, and a grid or a list of seeds of that size
+    would take the server's memory and time.
+
+    Raises
+    ------
+    ValueError
+        An empty input, or a value outside ``start``–``end``, naming the input's label, the
+        value and the allowed range.
+    """
+    value, low, high = widget.value, widget.start, widget.end
+    if value is None:
+        raise ValueError(f"{widget.label} is empty: give a whole number from {low} to {high}")
+    if not low <= value <= high:
+        raise ValueError(f"{widget.label} = {value} is outside the allowed range [{low}, {high}]")
+    return int(value)

@@ -27,6 +27,7 @@ import pandas as pd
 import panel as pn
 import param
 
+from dashboard.limits import whole_number_input
 from dashboard.plots import MM
 from dashboard.scheduler import EXECUTOR, outcome_of
 from dashboard.site_view import SETTLEMENT, YEARS, settlement_components_plot
@@ -261,14 +262,8 @@ class SettlementBandPanel(pn.viewable.Viewer):
         return {"a": float(self.cv_a.value)} if self.cv_a.value else None
 
     def counts(self) -> tuple[int, int]:
-        """The draws and seeds asked for (ValueError for an empty box)."""
-        for widget in (self.draws, self.seeds):
-            if widget.value is None:
-                raise ValueError(
-                    f"{widget.label} is empty: give a whole number from {widget.start} to "
-                    f"{widget.end}"
-                )
-        return int(self.draws.value), int(self.seeds.value)
+        """The draws and seeds asked for (ValueError for an empty box or a value beyond it)."""
+        return whole_number_input(self.draws), whole_number_input(self.seeds)
 
     def update_plan(self) -> None:
         """Say how many draws Start computes and about how long, before it is pressed."""

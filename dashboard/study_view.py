@@ -32,6 +32,7 @@ from bokeh.models import PrintfTickFormatter
 from holoviews.streams import Pipe
 
 from dashboard.controls import clean_number, slider_step, step_decimals
+from dashboard.limits import whole_number_input
 from dashboard.study_plots import display_values, finished_rows, plot_slots
 from dashboard.study_report import study_report_html
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
@@ -211,12 +212,12 @@ class StudyView(pn.viewable.Viewer):
             if path in vary:
                 raise ValueError(f"{path} is chosen twice: pick two different parameters")
             low, high = (round(end, step_decimals(slider.step)) for end in slider.value)
-            vary[path] = grid_values(path, low, high, points.value)
+            vary[path] = grid_values(path, low, high, whole_number_input(points))
         return vary
 
     def n_runs(self) -> int:
         """Runs of the chosen grid and seeds (ValueError for a grid that cannot be run)."""
-        return int(np.prod([len(v) for v in self.vary().values()])) * self.seeds.value
+        return int(np.prod([len(v) for v in self.vary().values()])) * whole_number_input(self.seeds)
 
     def update_plan(self) -> None:
         """Say how many runs Start computes and about how long, before it is pressed: the
@@ -301,7 +302,7 @@ class StudyView(pn.viewable.Viewer):
     def _seed_list(self) -> list[int]:
         """The first ``seeds`` irregularity seeds from the scenario's own."""
         first = self.scenario_source().irregularity.seed
-        return list(range(first, first + self.seeds.value))
+        return list(range(first, first + whole_number_input(self.seeds)))
 
     def _work(self, base: Scenario, vary: dict, seeds: list[int]) -> None:
         """The study (in its own thread when served); hands the outcome to the page."""

@@ -1,14 +1,16 @@
-"""Upload limits (dashboard/limits.py, issue 29 item 3): an oversized scenario, session or
+"""Upload and input limits (dashboard/limits.py, issue 29 item 3): an oversized scenario, session or
 profile file is refused before it is parsed, with its size and the limit."""
 
 from __future__ import annotations
 
 import pytest
 
-from dashboard import limits
+from dashboard import limits, study_view
 from dashboard.app import Dashboard
+from dashboard.longterm_checks import DASHBOARD_MAX_DRAWS, SettlementBandPanel
 from dashboard.longterm_view import CalibrationPanel
 from dashboard.site_view import LayerTable
+from dashboard.study_view import MAX_POINTS, MAX_SEEDS, StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model.params import Scenario, Site
 from model.pipeline import StageCache
@@ -71,3 +73,22 @@ def test_a_binary_or_huge_field_csv_upload_is_refused_in_one_line(content, messa
     calibration = CalibrationPanel()
     calibration.file_input.param.update(filename="data.csv", value=content)
     assert message in calibration.message.object and calibration.fit is None
+
+
+def test_study_counts_beyond_the_inputs_end_are_refused_by_the_server(cheap_scenario, monkeypatch):
+    """A value set past an input's ``end`` (as a crafted websocket message sets it) is refused
+    naming the input and its range; before, the server built the grid and ran the study."""
+    started = []
+    monkeypatch.setattr(study_view, "run_study", lambda *args, **kwargs: started.append(args))
+    view = StudyView(scenario_source=cheap_scenario, threaded=False)
+    for widget, end in ((view.first_points, MAX_POINTS), (view.seeds, MAX_SEEDS)):
+        widget.value = end + 1
+        refusal = f"{widget.label} = {end + 1} is outside the allowed range [1, {end}]"
+        assert view.plan.object == f"Cannot start: {refusal}"
+        view.start()
+        assert view.status.object == f"**Not started:** {refusal}" and started == []
+        widget.value = 1
+    band = SettlementBandPanel(threaded=False)
+    band.draws.value = DASHBOARD_MAX_DRAWS + 1
+    with pytest.raises(ValueError, match=rf"^Draws = {DASHBOARD_MAX_DRAWS + 1} is outside"):
+        band.counts()
