@@ -87,6 +87,8 @@ class Dashboard(pn.viewable.Viewer):
             restore=self.inputs.replace_scenario,
             compute=self.compute,
             preset=lambda: self.inputs.base_preset,
+            threaded=self.threaded,
+            executor=executor,
         )
         self.passage = PassageView(self.whatif, companions=self.runs.depth_companions)
         self.longterm = LongTermView(

@@ -13,12 +13,15 @@ from __future__ import annotations
 import html
 import io
 from collections.abc import Callable
+from concurrent.futures import Executor
 from functools import partial
 
 import panel as pn
 import param
 
 from dashboard.limits import SESSION_JSON_BYTES, refuse_oversized
+from dashboard.longterm_checks import SessionLoop
+from dashboard.scheduler import EXECUTOR, outcome_of
 from dashboard.whatif import (
     CURRENT_LABEL,
     MAX_PINNED,
@@ -72,6 +75,11 @@ class WhatIfPanel(pn.viewable.Viewer):
         cache. The dashboard passes one that uses its stage cache.
     preset : callable() -> str, optional
         Name of the preset default names are taken relative to (default ``"paper"``).
+    threaded : bool
+        Compute a loaded session's runs in ``executor`` (served app), not in the calling
+        thread (tests): up to :data:`MAX_PINNED` runs would hold the session's event loop.
+    executor : Executor
+        Where a loaded session's runs compute (default: the shared :data:`EXECUTOR`).
     """
 
     overlays_changed = param.Event(
@@ -84,6 +92,8 @@ class WhatIfPanel(pn.viewable.Viewer):
         restore: Callable[[Scenario], None],
         compute: Compute | None = None,
         preset: Callable[[], str] | None = None,
+        threaded: bool = False,
+        executor: Executor = EXECUTOR,
         **params,
     ):
         super().__init__(**params)
@@ -91,6 +101,8 @@ class WhatIfPanel(pn.viewable.Viewer):
         self._restore = restore
         self._compute = compute if compute is not None else partial(run, cache=None)
         self._preset = preset if preset is not None else (lambda: "paper")
+        self._threaded, self._executor = threaded, executor
+        self._loop = SessionLoop()
         self.session = WhatIfSession()
 
         self.name_input = pn.widgets.TextInput(
@@ -309,17 +321,36 @@ class WhatIfPanel(pn.viewable.Viewer):
             self.refresh()
 
     def _on_load(self, event: param.parameterized.Event) -> None:
-        """Replace the session by a saved one (its runs recomputed); refuse bad files clearly."""
+        """Replace the session by a saved one, its runs recomputed in the executor when
+        threaded; refuse bad files clearly."""
         if event.new is None:
             return
         filename = self.load_input.filename or "the file"
         self.load_input.clear()  # so that loading the same file again is a new event
         try:
             refuse_oversized(event.new, filename, SESSION_JSON_BYTES)
-            session, current = load_session(event.new, compute=self._compute)
-        except (ValueError, SimulationError) as error:
+        except ValueError as error:
             self._show_message(f"Could not load {filename} as a session: {error}")
             return
+        finish = partial(self._finish_load, filename)
+        load = partial(load_session, compute=self._compute)
+        if not self._threaded:
+            finish(outcome_of(load, event.new))
+            return
+        self.load_input.disabled = True  # one load at a time
+        self._loop.remember()
+        future = self._executor.submit(outcome_of, load, event.new)
+        future.add_done_callback(lambda done: self._loop.call(partial(finish, done.result())))
+
+    def _finish_load(self, filename: str, outcome) -> None:
+        """Show a loaded session, or why it was refused."""
+        self.load_input.disabled = False
+        if isinstance(outcome, (ValueError, SimulationError)):
+            self._show_message(f"Could not load {filename} as a session: {outcome}")
+            return
+        if isinstance(outcome, BaseException):
+            raise outcome
+        session, current = outcome
         self.session.clear()
         self.session = session
         if current is not None:
@@ -327,7 +358,9 @@ class WhatIfPanel(pn.viewable.Viewer):
         self._changed()
 
     def _release(self, session_context) -> None:
-        """The browser session closed: let go of every pinned result."""
+        """The browser session closed: let go of every pinned result (and of a session still
+        loading)."""
+        self._loop.closed = True
         self.session.clear()
         # the page's models may be gone already: the widgets let go without updating them
         with param.discard_events(self.runs_list), param.discard_events(self.run_select):

@@ -5,6 +5,7 @@ two cheap pipeline runs (differing only in the soil) serve as the runs to pin.
 """
 
 import json
+from concurrent.futures import Future
 
 import pytest
 
@@ -177,6 +178,46 @@ def test_session_save_and_load_round_trip(board, stiff_results, cache, base_resu
     fresh.refresh()
     assert fresh.table.object == panel.table.object  # the same table
     assert len(other.events) == 1
+
+
+class HeldExecutor:
+    """An executor that holds every job until the test runs it."""
+
+    def __init__(self):
+        self.jobs = []
+
+    def submit(self, function, *args):
+        future = Future()
+        self.jobs.append((future, function, args))
+        return future
+
+    def run_all(self):
+        for future, function, args in self.jobs:
+            future.set_result(function(*args))
+
+
+def test_a_loaded_sessions_runs_compute_in_the_executor_not_the_event_loop(
+    board, stiff_results, cache, base_results
+):
+    """Up to 8 runs of a loaded session were computed inside the load callback, holding the
+    session's event loop (issue 29): served, they go to the executor like other runs."""
+    panel = board.panel()
+    _pin(panel, "today")
+    saved = panel.save_button.callback().getvalue().encode("utf-8")
+    other, executor = FakeDashboard(base_results, cache), HeldExecutor()
+    fresh = WhatIfPanel(
+        current=other.current,
+        restore=other.restore,
+        compute=other.compute,
+        threaded=True,
+        executor=executor,
+    )
+    fresh.load_input.param.update(filename="s.json", value=saved)
+    assert other.computed == [] and fresh.session.runs == [] and len(executor.jobs) == 1
+    assert fresh.load_input.disabled
+    executor.run_all()  # not served: the outcome is shown at once
+    assert other.computed == [base_results.scenario_json]
+    assert fresh.session.names() == ["today"] and not fresh.load_input.disabled
 
 
 @pytest.mark.parametrize(
