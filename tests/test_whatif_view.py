@@ -192,7 +192,8 @@ class HeldExecutor:
         return future
 
     def run_all(self):
-        for future, function, args in self.jobs:
+        while self.jobs:
+            future, function, args = self.jobs.pop(0)
             future.set_result(function(*args))
 
 
@@ -218,6 +219,13 @@ def test_a_loaded_sessions_runs_compute_in_the_executor_not_the_event_loop(
     executor.run_all()  # not served: the outcome is shown at once
     assert other.computed == [base_results.scenario_json]
     assert fresh.session.names() == ["today"] and not fresh.load_input.disabled
+    closed = WhatIfPanel(
+        current=other.current, restore=other.restore, threaded=True, executor=executor
+    )
+    closed.load_input.param.update(filename="s.json", value=saved)
+    closed._release(None)  # the tab was closed while its session loaded
+    executor.run_all()
+    assert closed.session.runs == []
 
 
 @pytest.mark.parametrize(
