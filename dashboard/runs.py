@@ -217,7 +217,11 @@ class SessionRuns(param.Parameterized):
         return {"other_model": self.other_model, "fe_result": self.fe_result}
 
     def close(self) -> None:
-        """Drop the results of a closed session (telling no watcher: the page is gone)."""
+        """Drop the results of a closed session (telling no watcher: the page is gone) and
+        its runs still waiting, the other model's curve included."""
+        self.latest.cancel()
+        self.companion.cancel()
+        self._companion_wanted = None
         with param.discard_events(self):
             self.results = self.other_model = None
         self.fe_result = None

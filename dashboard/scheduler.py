@@ -86,6 +86,7 @@ class LatestRun(Generic[Job, Outcome]):
         self._waiting: Job | None = None
         self._has_waiting = False
         self._busy = False
+        self._cancelled = False
 
     @property
     def busy(self) -> bool:
@@ -95,14 +96,25 @@ class LatestRun(Generic[Job, Outcome]):
     def request(self, job: Job) -> bool:
         """Ask for ``job`` to run, replacing any job still waiting.
 
-        Returns True when nothing was running: the caller must then await :meth:`drain`.
+        Returns True when nothing was running: the caller must then await :meth:`drain`;
+        False also after :meth:`cancel`, when the job is dropped.
         """
         with self._lock:
+            if self._cancelled:
+                return False
             self._waiting, self._has_waiting = job, True
             if self._busy:
                 return False
             self._busy = True
             return True
+
+    def cancel(self) -> None:
+        """Drop the waiting job and every later request; the job computing finishes (a
+        pipeline run cannot be interrupted) but its outcome is not handed on (a closed
+        session)."""
+        with self._lock:
+            self._cancelled = True
+            self._waiting, self._has_waiting = None, False
 
     def _next(self) -> tuple[bool, Job | None]:
         """Take the waiting job, or mark the queue idle when there is none."""
@@ -134,9 +146,10 @@ class LatestRun(Generic[Job, Outcome]):
                 future = asyncio.wrap_future(self._executor.submit(outcome_of, self._compute, job))
                 while not future.done():
                     await asyncio.wait([future], timeout=poll_s)
-                    if tick is not None:
+                    if tick is not None and not self._cancelled:
                         tick()
-                finished(job, future.result())
+                if not self._cancelled:
+                    finished(job, future.result())
         except BaseException:
             with self._lock:
                 self._busy, self._waiting, self._has_waiting = False, None, False

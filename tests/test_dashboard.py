@@ -23,6 +23,7 @@ from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
 from dashboard import plots
+from dashboard import runs as runs_module
 from dashboard.app import Dashboard
 from dashboard.export import main as export_main
 from dashboard.inputs import HIDDEN, PRIMARY, SWITCHES
@@ -611,6 +612,15 @@ def test_closing_a_session_drops_its_results(dashboard):
     dashboard.close()
     assert dashboard.runs.results is None and not _streams(dashboard)
     assert all(pane.object is None for pane in _panes(dashboard).values())
+
+
+def test_a_closed_session_computes_no_more_runs(dashboard, monkeypatch):
+    """Neither a change arriving after the close nor the other model's curve is computed."""
+    monkeypatch.setattr(runs_module, "run", lambda *args, **kwargs: pytest.fail("a run"))
+    dashboard.close()
+    dashboard.scenario.train.speed_kmh += 5.0
+    dashboard.runs.compute_waiting()
+    assert dashboard.runs.results is None and not dashboard.runs.latest.busy
 
 
 # ---- export.py ------------------------------------------------------------------------------

@@ -72,6 +72,35 @@ def test_an_exception_is_delivered_as_the_outcome(pool):
     assert runs.request(8) is True  # the queue is usable again
 
 
+def test_a_cancelled_queue_drops_its_waiting_job_and_the_computing_ones_outcome(pool):
+    """A closed session (issue 29): while job 1 computes, job 2 waits; after cancel, job 2 is
+    never computed, job 1's outcome is not handed on, and later requests are dropped."""
+    release = threading.Event()
+    computed = []
+
+    def compute(job):
+        computed.append(job)
+        assert release.wait(timeout=60)
+        return job
+
+    runs = LatestRun(compute, pool)
+    started, finished = [], []
+
+    async def scenario():
+        assert runs.request(1)
+        draining = asyncio.create_task(runs.drain(*_record(started, finished), poll_s=0.01))
+        while not computed:
+            await asyncio.sleep(0.01)
+        assert runs.request(2) is False
+        runs.cancel()
+        release.set()
+        await draining
+
+    asyncio.run(scenario())
+    assert computed == [1] and started == [1] and finished == [] and not runs.busy
+    assert runs.request(3) is False and not runs.busy
+
+
 def test_sessions_compute_in_parallel(pool):
     """Two sessions' runs overlap in time: each waits until the other has started (a barrier
     that a one-worker pool could never pass)."""
