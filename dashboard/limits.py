@@ -6,11 +6,22 @@ operating choices, not physics.
 
 from __future__ import annotations
 
+import os
+import threading
+from collections.abc import Callable
+
+from model.study.execution import SCHEDULER_ENV
+
 MEGABYTE = 1_000_000
 SESSION_JSON_BYTES = 2 * MEGABYTE  # a what-if session or a scenario file
 PROFILE_CSV_BYTES = 12 * MEGABYTE  # a measured track-irregularity profile
 BOREHOLE_CSV_BYTES = 3 * MEGABYTE  # a borehole log's layer table
 TRIAXIAL_CSV_BYTES = 3 * MEGABYTE  # a cyclic triaxial test's records
+LOCAL_CLUSTERS = 1
+"""Studies and settlement bands computing at once on a LocalCluster of their own, per server
+process: each starts a worker process per core, so a second one would only share the cores and
+add its memory. A shared Dask scheduler (``$TUNNELSETTLE_SCHEDULER``) is not limited here."""
+_local_clusters = threading.BoundedSemaphore(LOCAL_CLUSTERS)
 
 
 def refuse_oversized(data: bytes | str, what: str, limit_bytes: int) -> None:
@@ -50,3 +61,29 @@ def whole_number_input(widget) -> int:
     if not low <= value <= high:
         raise ValueError(f"{widget.label} = {value} is outside the allowed range [{low}, {high}]")
     return int(value)
+
+
+def reserve_local_cluster(scheduler) -> Callable[[], None]:
+    """Take one of the server's :data:`LOCAL_CLUSTERS` for a study or band that would start a
+    LocalCluster of its own (``scheduler`` None and no ``$TUNNELSETTLE_SCHEDULER``).
+
+    Returns
+    -------
+    callable
+        Gives the cluster back; call it once the study or band has ended (it does nothing for
+        one on a shared scheduler).
+
+    Raises
+    ------
+    ValueError
+        Every local cluster is taken, saying when to start again and what lifts the limit.
+    """
+    if scheduler is not None or os.environ.get(SCHEDULER_ENV):
+        return lambda: None
+    if not _local_clusters.acquire(blocking=False):
+        raise ValueError(
+            f"this server computes at most {LOCAL_CLUSTERS} study or settlement band at a time "
+            "on its own cores, and one is computing: start again when it has finished (a "
+            f"shared Dask scheduler, ${SCHEDULER_ENV}, lifts the limit)"
+        )
+    return _local_clusters.release

@@ -27,7 +27,7 @@ import pandas as pd
 import panel as pn
 import param
 
-from dashboard.limits import whole_number_input
+from dashboard.limits import reserve_local_cluster, whole_number_input
 from dashboard.plots import MM
 from dashboard.scheduler import EXECUTOR, outcome_of
 from dashboard.site_view import SETTLEMENT, YEARS, settlement_components_plot
@@ -329,6 +329,7 @@ class SettlementBandPanel(pn.viewable.Viewer):
             return
         try:
             n_draws, n_seeds = self.counts()
+            release_cluster = reserve_local_cluster(self.scheduler)
         except ValueError as error:
             self.status.object = f"**Not started:** {error}"
             return
@@ -346,7 +347,14 @@ class SettlementBandPanel(pn.viewable.Viewer):
         self.start_button.disabled, self.cancel_button.disabled = True, False
         self._loop.remember()
         work = partial(
-            self._work, base, self._base_json, n_draws, n_seeds, self.law_cv(), self._cancel
+            self._work,
+            base,
+            self._base_json,
+            n_draws,
+            n_seeds,
+            self.law_cv(),
+            self._cancel,
+            release_cluster,
         )
         if self.threaded:
             threading.Thread(target=work, name="settlement-band", daemon=True).start()
@@ -372,8 +380,18 @@ class SettlementBandPanel(pn.viewable.Viewer):
         self.cancel_button.disabled = True
         self.status.object = message
 
-    def _work(self, base: Scenario, base_json: str, n_draws: int, n_seeds: int, law_cv, cancel):
-        """The band (in its own thread when served); hands the outcome to the page."""
+    def _work(
+        self,
+        base: Scenario,
+        base_json: str,
+        n_draws: int,
+        n_seeds: int,
+        law_cv,
+        cancel,
+        release_cluster,
+    ):
+        """The band (in its own thread when served); gives its cluster back and hands the
+        outcome to the page."""
         try:
             outcome = settlement_band(
                 base,
@@ -386,6 +404,8 @@ class SettlementBandPanel(pn.viewable.Viewer):
             )
         except Exception as error:  # shown on the page; the server must not lose the thread
             outcome = error
+        finally:
+            release_cluster()
         self._loop.call(partial(self._finish, base_json, outcome))
 
     def _tick(self, done: int) -> None:

@@ -32,7 +32,7 @@ from bokeh.models import PrintfTickFormatter
 from holoviews.streams import Pipe
 
 from dashboard.controls import clean_number, slider_step, step_decimals
-from dashboard.limits import whole_number_input
+from dashboard.limits import reserve_local_cluster, whole_number_input
 from dashboard.study_plots import display_values, finished_rows, plot_slots
 from dashboard.study_report import study_report_html
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
@@ -268,6 +268,7 @@ class StudyView(pn.viewable.Viewer):
                     f"{n_runs} runs: at most {MAX_RUNS_UNCONFIRMED} from the dashboard; use "
                     "fewer points or seeds (or the command line with --yes)"
                 )
+            release_cluster = reserve_local_cluster(self.scheduler)
         except ValueError as error:
             self.status.object = f"**Not started:** {error}"
             return
@@ -285,7 +286,7 @@ class StudyView(pn.viewable.Viewer):
             # a closed browser tab stops its study instead of leaving it to run to the end
             pn.state.curdoc.on_session_destroyed(lambda context: self._cancel.set())
         self._doc = pn.state.curdoc
-        work = partial(self._work, base, vary, seeds)
+        work = partial(self._work, base, vary, seeds, release_cluster)
         if self.threaded:
             self._thread = threading.Thread(target=work, name="study", daemon=True)
             self._thread.start()
@@ -304,8 +305,9 @@ class StudyView(pn.viewable.Viewer):
         first = self.scenario_source().irregularity.seed
         return list(range(first, first + whole_number_input(self.seeds)))
 
-    def _work(self, base: Scenario, vary: dict, seeds: list[int]) -> None:
-        """The study (in its own thread when served); hands the outcome to the page."""
+    def _work(self, base: Scenario, vary: dict, seeds: list[int], release_cluster) -> None:
+        """The study (in its own thread when served); gives its cluster back and hands the
+        outcome to the page."""
         try:
             outcome = run_study(
                 base,
@@ -318,6 +320,8 @@ class StudyView(pn.viewable.Viewer):
             )
         except Exception as error:  # shown on the page; the server must not lose the thread
             outcome = error
+        finally:
+            release_cluster()
         self._on_page(partial(self._finish, outcome))
 
     def _on_row(self, done: int, total: int, row: dict) -> None:

@@ -14,6 +14,7 @@ from dashboard.study_view import MAX_POINTS, MAX_SEEDS, StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model.params import Scenario, Site
 from model.pipeline import StageCache
+from model.study.execution import SCHEDULER_ENV
 
 OVERSIZED_JSON = b" " * (limits.SESSION_JSON_BYTES + 1)  # valid JSON whitespace, too large
 
@@ -92,3 +93,36 @@ def test_study_counts_beyond_the_inputs_end_are_refused_by_the_server(cheap_scen
     band.draws.value = DASHBOARD_MAX_DRAWS + 1
     with pytest.raises(ValueError, match=rf"^Draws = {DASHBOARD_MAX_DRAWS + 1} is outside"):
         band.counts()
+
+
+def test_one_local_cluster_per_server_a_second_study_or_band_is_refused(
+    cheap_scenario, monkeypatch
+):
+    """Each session's study or band started its own LocalCluster (a worker process per core),
+    however many ran (issue 29): now one at a time per server; the others are refused, saying
+    when to start again, and a shared scheduler is not limited."""
+    monkeypatch.delenv(SCHEDULER_ENV, raising=False)
+    studies = []
+
+    def study_that_fails(*args, **kwargs):
+        studies.append(args)
+        raise RuntimeError("no study in this test")
+
+    monkeypatch.setattr(study_view, "run_study", study_that_fails)
+    other_session = limits.reserve_local_cluster(None)  # its study computes
+    view = StudyView(scenario_source=cheap_scenario, threaded=False)
+    view.start()
+    assert view.status.object.startswith(
+        "**Not started:** this server computes at most 1 study or settlement band at a time"
+    )
+    assert studies == [] and not view.running
+    band = SettlementBandPanel(threaded=False)
+    band._results = object()  # results on screen: the band's Start is live
+    band.start()
+    assert band.status.object.startswith("**Not started:** this server computes at most 1")
+    release = limits.reserve_local_cluster("tcp://127.0.0.1:8786")  # a shared scheduler
+    release()
+    other_session()  # that study ended
+    view.start()
+    assert len(studies) == 1 and view.status.object == "**Study failed:** no study in this test"
+    limits.reserve_local_cluster(None)()  # the view's study gave its cluster back
