@@ -108,6 +108,13 @@ def _probe() -> dict:
         "cache_entries": [{k: len(v) for k, v in c._entries.items()} for c in caches],
         "ndarray_mb": _ndarray_mb(objects),
         "sessions": types.get("bokeh.server.session.ServerSession", 0),
+        "state_watchers": dict(collections.Counter(
+            getattr(w.fn, "__qualname__", repr(w.fn))
+            for what in pn.state._param__private.watchers.values()
+            for ws in what.values()
+            for w in ws
+        )),
+        "link_registry": len(__import__("panel.links").links.Callback.registry),
     }
     wanted = os.environ.get("TUNNELSETTLE_PROBE_CHAINS", "")
     report["chains"] = {}
