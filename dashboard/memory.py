@@ -83,9 +83,13 @@ def release_soon(call_later: Callable[[float, Callable[[], None]], object]) -> N
     call_later(RELEASE_DELAY_S, release)
 
 
-def session_closed(close: Callable[[], None], _context=None) -> None:
+def session_closed(close: Callable[[], None], session_context) -> None:
     """A served session was discarded: ``close()`` drops its memory, and once the sessions
-    closing together are all gone the freed heap goes back to the system."""
+    closing together are all gone the freed heap goes back to the system.
+
+    Bound as ``partial(session_closed, close)``, it has the one argument (the session's
+    context, unused) that Bokeh's ``on_session_destroyed`` requires.
+    """
     from tornado.ioloop import IOLoop
 
     close()

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import gc
 import weakref
+from functools import partial
 
+from bokeh.document import Document
 from panel.links import Callback
 
 from dashboard import memory
@@ -49,3 +51,17 @@ def test_release_soon_trims_once_after_a_burst():
 
 def test_release_memory_trims_the_heap_on_glibc():
     assert memory.release_memory() in (True, False)  # False only without glibc
+
+
+def test_session_closed_bound_to_a_close_is_accepted_by_bokeh_and_closes():
+    closed = []
+    callback = partial(memory.session_closed, lambda: closed.append(1))
+    Document().on_session_destroyed(callback)  # Bokeh checks the signature: one argument
+    scheduled = []
+    real = memory.release_soon
+    memory.release_soon = lambda call_later: scheduled.append(call_later)
+    try:
+        callback(None)
+    finally:
+        memory.release_soon = real
+    assert closed == [1] and len(scheduled) == 1
