@@ -46,7 +46,8 @@ def _chain(target, objects, ignore: set, depth: int = 12) -> list[str]:
         found = gc.get_referrers(current)
         ignore.add(id(found))
         referrers = [
-            r for r in found
+            r
+            for r in found
             if id(r) not in ignore and id(r) not in seen and not isinstance(r, types.FrameType)
         ]
         ignore.add(id(referrers))
@@ -96,9 +97,7 @@ def _probe() -> dict:
     except OSError:
         pass
     objects = gc.get_objects()
-    types = collections.Counter(
-        f"{type(o).__module__}.{type(o).__qualname__}" for o in objects
-    )
+    types = collections.Counter(f"{type(o).__module__}.{type(o).__qualname__}" for o in objects)
     caches = [o for o in objects if type(o).__name__ == "StageCache"]
     report = {
         "rss_mb": rss,
@@ -108,12 +107,14 @@ def _probe() -> dict:
         "cache_entries": [{k: len(v) for k, v in c._entries.items()} for c in caches],
         "ndarray_mb": _ndarray_mb(objects),
         "sessions": types.get("bokeh.server.session.ServerSession", 0),
-        "state_watchers": dict(collections.Counter(
-            getattr(w.fn, "__qualname__", repr(w.fn))
-            for what in pn.state._param__private.watchers.values()
-            for ws in what.values()
-            for w in ws
-        )),
+        "state_watchers": dict(
+            collections.Counter(
+                getattr(w.fn, "__qualname__", repr(w.fn))
+                for what in pn.state._param__private.watchers.values()
+                for ws in what.values()
+                for w in ws
+            )
+        ),
         "link_registry": len(__import__("panel.links").links.Callback.registry),
     }
     wanted = os.environ.get("TUNNELSETTLE_PROBE_CHAINS", "")
@@ -131,7 +132,9 @@ def _probe() -> dict:
             stats = snapshot.compare_to(_previous[-1], "traceback")[:15]
             report["tracemalloc_top"] = [
                 f"{s.size_diff / 1e6:+.1f} MB in {s.count_diff:+d} blocks: "
-                + " <- ".join(f"{f.filename.rsplit('/', 2)[-1]}:{f.lineno}" for f in s.traceback[:6])
+                + " <- ".join(
+                    f"{f.filename.rsplit('/', 2)[-1]}:{f.lineno}" for f in s.traceback[:6]
+                )
                 for s in stats
             ]
         _previous[:] = [snapshot]
