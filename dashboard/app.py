@@ -17,6 +17,7 @@ URL query arguments choose the initial scenario: ``?preset=single_bogie`` and an
 from __future__ import annotations
 
 from concurrent.futures import Executor, Future
+from functools import partial
 
 import panel as pn
 import param
@@ -24,6 +25,7 @@ import param
 from dashboard.ground_view import GroundView
 from dashboard.inputs import InputsPanel
 from dashboard.longterm_view import LongTermView
+from dashboard.memory import release_links, session_closed
 from dashboard.messages import Messages
 from dashboard.page import PAGE_CSS, close_drawer_in_narrow_windows
 from dashboard.passage_view import PassageView
@@ -186,11 +188,13 @@ class Dashboard(pn.viewable.Viewer):
         self.runs.refresh()
 
     def close(self) -> None:
-        """Drop the results and plots of a closed session (its memory returns at once)."""
+        """Drop the results and plots of a closed session (its memory returns at once), and
+        its widgets' entries in Panel's link registry (which would keep them for ever)."""
         self.passage.close()
         self.longterm.close()
         self.ground.close()
         self.runs.close()
+        release_links(pn.Column(*self.main()))  # the sidebar's inputs register none
 
     def _after_change(self) -> None:
         """An input changed: the soil quantities follow at once, and a run is requested."""
@@ -217,7 +221,8 @@ def serve_session() -> Dashboard:
     # once the page is loaded: its own run, or (drawn from the cache) only the comparison curve
     drawn = dashboard.runs.show_cached()
     pn.state.onload(dashboard.runs.compute_waiting if drawn else dashboard.refresh)
-    pn.state.on_session_destroyed(lambda _context: dashboard.close())
+    # bound now: the server clears this script's globals when a session is destroyed
+    pn.state.on_session_destroyed(partial(session_closed, dashboard.close))
     close_drawer_in_narrow_windows(pn.state.curdoc)
     with pn.io.hold(freeze=True):  # the page's ~20 roots are indexed once, not each
         dashboard.template().servable()

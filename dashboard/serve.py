@@ -93,7 +93,9 @@ def auth_options(password_file: str | None, environ: dict | None = None) -> list
             f"least {MIN_COOKIE_SECRET_CHARS} (e.g. python -c 'import secrets; "
             "print(secrets.token_urlsafe(32))')"
         )
-    return ["--basic-auth", str(password_file), "--cookie-secret", secret]
+    # "=": a secret from secrets.token_urlsafe may begin with "-", which argparse would take
+    # for an option
+    return ["--basic-auth", str(password_file), f"--cookie-secret={secret}"]
 
 
 def serve_command(args: argparse.Namespace, extra: list[str]) -> list[str]:

@@ -3,9 +3,11 @@ environment, refused with a message when either is missing."""
 
 from __future__ import annotations
 
+import argparse
 import json
 
 import pytest
+from panel.command.serve import Serve
 
 from dashboard import serve
 
@@ -23,7 +25,18 @@ def test_auth_on_with_file_and_secret(tmp_path, monkeypatch):
     users.write_text(json.dumps({"engineer": "a long password"}))
     command = _command(["--basic-auth", str(users)], {serve.COOKIE_SECRET_ENV: SECRET}, monkeypatch)
     assert command[command.index("--basic-auth") + 1] == str(users)
-    assert command[command.index("--cookie-secret") + 1] == SECRET
+    assert f"--cookie-secret={SECRET}" in command
+
+
+def test_a_secret_beginning_with_a_dash_reaches_panel_serve(tmp_path, monkeypatch):
+    """secrets.token_urlsafe gives such a secret about one time in 64."""
+    users = tmp_path / "users.json"
+    users.write_text("{}")
+    secret = "-" + SECRET
+    command = _command(["--basic-auth", str(users)], {serve.COOKIE_SECRET_ENV: secret}, monkeypatch)
+    parser = argparse.ArgumentParser()
+    Serve(parser=parser.add_subparsers().add_parser("serve"))
+    assert parser.parse_args(command[1:]).cookie_secret == secret
 
 
 def test_auth_off_without_file(monkeypatch):
