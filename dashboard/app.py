@@ -221,7 +221,6 @@ def serve_session() -> Dashboard:
     # once the page is loaded: its own run, or (drawn from the cache) only the comparison curve
     drawn = dashboard.runs.show_cached()
     pn.state.onload(dashboard.runs.compute_waiting if drawn else dashboard.refresh)
-    # bound now: the server clears this script's globals when a session is destroyed
     pn.state.on_session_destroyed(partial(session_closed, dashboard.close))
     close_drawer_in_narrow_windows(pn.state.curdoc)
     with pn.io.hold(freeze=True):  # the page's ~20 roots are indexed once, not each
@@ -229,9 +228,13 @@ def serve_session() -> Dashboard:
     return dashboard
 
 
-if pn.state.served:
+if pn.state.served and __name__ != "dashboard.app":  # this file, run by panel serve
+    # The page is built by the imported module, not by this copy of the script: Bokeh runs the
+    # script anew for each session and clears its globals when the session is destroyed, so
+    # the session's close would find no names (and each session would define its own classes).
+    from dashboard import app
     from dashboard.serve import use_light_resources
 
     use_light_resources()  # no MathJax bundle unless a formula is shown
     pn.extension("tabulator", notifications=False)  # the long-term tab's layer table
-    serve_session()
+    app.serve_session()
