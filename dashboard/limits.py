@@ -10,6 +10,7 @@ import os
 import threading
 from collections.abc import Callable
 
+from model.run_cost import estimate_run
 from model.study.execution import SCHEDULER_ENV
 
 MEGABYTE = 1_000_000
@@ -17,6 +18,10 @@ SESSION_JSON_BYTES = 2 * MEGABYTE  # a what-if session or a scenario file
 PROFILE_CSV_BYTES = 12 * MEGABYTE  # a measured track-irregularity profile
 BOREHOLE_CSV_BYTES = 3 * MEGABYTE  # a borehole log's layer table
 TRIAXIAL_CSV_BYTES = 3 * MEGABYTE  # a cyclic triaxial test's records
+SERVED_RUN_SECONDS = 180.0
+"""Longest run the dashboard computes for a session, as :func:`model.run_cost.estimate_run`
+puts it: a longer one would hold one of the server's few workers for minutes (the paper case
+takes about half a second; the command line computes any run)."""
 LOCAL_CLUSTERS = 1
 """Studies and settlement bands computing at once on a LocalCluster of their own, per server
 process: each starts a worker process per core, so a second one would only share the cores and
@@ -87,3 +92,21 @@ def reserve_local_cluster(scheduler) -> Callable[[], None]:
             f"shared Dask scheduler, ${SCHEDULER_ENV}, lifts the limit)"
         )
     return _local_clusters.release
+
+
+def refuse_long_run(scenario) -> None:
+    """Refuse a run the server would compute for longer than :data:`SERVED_RUN_SECONDS`.
+
+    Raises
+    ------
+    ValueError
+        Naming the estimate, the stage and parameters that drive it, the bound, and the
+        command line that computes the run anyway.
+    """
+    estimate = estimate_run(scenario)
+    if estimate.total_seconds > SERVED_RUN_SECONDS:
+        raise ValueError(
+            f"{estimate.slow_message()}; the dashboard computes runs of at most "
+            f"{SERVED_RUN_SECONDS:.0f} s: change those inputs, or compute it with "
+            "tunnelsettle run on your own machine"
+        )

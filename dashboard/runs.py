@@ -24,9 +24,10 @@ import panel as pn
 import param
 
 from dashboard import plots
+from dashboard.limits import refuse_long_run
 from dashboard.messages import Messages
 from dashboard.plot_panes import one_message
-from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of
+from dashboard.scheduler import EXECUTOR, LatestRun, RunCancelled, outcome_of
 from model import scenarios
 from model.fe.store import FEResult, stored_fe_result
 from model.params import Scenario, ScenarioError
@@ -87,9 +88,18 @@ class ResultsView(Protocol):
 
 
 def admitted(scenario: Scenario) -> Scenario:
-    """``scenario``, holding its measured profile by content: the last guard before the server
-    computes (every way in admits already), so no run here opens a file a user named."""
+    """``scenario``, holding its measured profile by content and estimated to compute within
+    the server's bound: the last guard before the server computes (every way in admits
+    already), so no run here opens a file a user named or holds a worker for many minutes.
+
+    Raises
+    ------
+    ValueError
+        A profile file outside the data folder, or a run estimated to take longer than
+        :data:`dashboard.limits.SERVED_RUN_SECONDS`.
+    """
     admit_profile(scenario, data_folder())
+    refuse_long_run(scenario)
     return scenario
 
 
@@ -278,7 +288,17 @@ class SessionRuns(param.Parameterized):
             view.mark_stale(stale)
 
     def _note_progress(self, stage: str, fraction: float) -> None:
-        """Pipeline progress callback (runs in a worker thread): just remember it."""
+        """Pipeline progress callback (runs in a worker thread): remember it, or stop the run
+        if the session has closed (at the next report: between stages and between chunks of
+        the vehicle–track integration).
+
+        Raises
+        ------
+        RunCancelled
+            The session has closed.
+        """
+        if self.latest.cancelled:
+            raise RunCancelled(f"the session closed during the {_stage_name(stage)} stage")
         self._progress_state = (stage, fraction)
 
     @one_message()

@@ -27,6 +27,11 @@ Outcome = TypeVar("Outcome")
 EXECUTOR = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="pipeline")
 """Worker threads shared by every session of the server process."""
 
+
+class RunCancelled(Exception):
+    """Raised inside a computing run whose session has closed: the run stops there."""
+
+
 _warm_up_lock = threading.Lock()
 _warm_up_future: Future | None = None
 
@@ -108,10 +113,15 @@ class LatestRun(Generic[Job, Outcome]):
             self._busy = True
             return True
 
+    @property
+    def cancelled(self) -> bool:
+        """True once :meth:`cancel` was called."""
+        return self._cancelled
+
     def cancel(self) -> None:
-        """Drop the waiting job and every later request; the job computing finishes (a
-        pipeline run cannot be interrupted) but its outcome is not handed on (a closed
-        session)."""
+        """Drop the waiting job and every later request; the outcome of the job computing is
+        not handed on (a closed session). The job itself stops where its ``compute`` checks
+        :attr:`cancelled` (raising :class:`RunCancelled`), else it finishes."""
         with self._lock:
             self._cancelled = True
             self._waiting, self._has_waiting = None, False

@@ -29,6 +29,7 @@ from dashboard.export import main as export_main
 from dashboard.inputs import HIDDEN, PRIMARY, SWITCHES
 from dashboard.longterm_view import LONGTERM_PLOTS
 from dashboard.report import package_version, report_html
+from dashboard.scheduler import RunCancelled
 from model import scenarios
 from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
@@ -621,6 +622,26 @@ def test_a_closed_session_computes_no_more_runs(dashboard, monkeypatch):
     dashboard.scenario.train.speed_kmh += 5.0
     dashboard.runs.compute_waiting()
     assert dashboard.runs.results is None and not dashboard.runs.latest.busy
+
+
+def test_a_closed_sessions_computing_run_stops_at_its_next_progress_report(dashboard, monkeypatch):
+    """The tab closes while the vehicle–track stage computes: the run stops after that chunk
+    of the integration instead of holding a server worker to the end."""
+    reports = []
+    note = dashboard.runs._note_progress
+
+    def close_after_the_first_chunk(stage, fraction):
+        reports.append((stage, fraction))
+        if stage == "vehicle_track" and fraction > 0:
+            dashboard.close()
+        note(stage, fraction)
+
+    monkeypatch.setattr(dashboard.runs, "cache", StageCache())  # every stage computes
+    monkeypatch.setattr(dashboard.runs, "_note_progress", close_after_the_first_chunk)
+    with pytest.raises(RunCancelled, match="the session closed during the vehicle"):
+        dashboard.runs._compute(dashboard.scenario)
+    stage, fraction = reports[-1]
+    assert stage == "vehicle_track" and 0 < fraction < 1
 
 
 # ---- export.py ------------------------------------------------------------------------------

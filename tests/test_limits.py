@@ -14,6 +14,7 @@ from dashboard.study_view import MAX_POINTS, MAX_SEEDS, StudyView
 from dashboard.whatif_view import WhatIfPanel
 from model.params import Scenario, Site
 from model.pipeline import StageCache
+from model.run_cost import estimate_run
 from model.study.execution import SCHEDULER_ENV
 
 OVERSIZED_JSON = b" " * (limits.SESSION_JSON_BYTES + 1)  # valid JSON whitespace, too large
@@ -126,3 +127,21 @@ def test_one_local_cluster_per_server_a_second_study_or_band_is_refused(
     view.start()
     assert len(studies) == 1 and view.status.object == "**Study failed:** no study in this test"
     limits.reserve_local_cluster(None)()  # the view's study gave its cluster back
+
+
+def test_a_run_estimated_beyond_the_servers_bound_is_refused_with_its_estimate(
+    cheap_scenario, monkeypatch
+):
+    """A URL argument or an uploaded scenario that the run-cost model puts above the bound is
+    not computed: the page says why and how to compute it."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=StageCache())
+    seconds = estimate_run(board.scenario).total_seconds
+    monkeypatch.setattr(limits, "SERVED_RUN_SECONDS", 0.5 * seconds)
+    board.refresh()
+    assert board.runs.results is None and board.messages.error_alert.visible
+    text = board.messages.error_alert.object.replace("\\", "")
+    assert f"estimated to take about {seconds:.0f} s" in text
+    assert f"at most {0.5 * seconds:.0f} s" in text and "tunnelsettle run" in text
+    monkeypatch.setattr(limits, "SERVED_RUN_SECONDS", 2.0 * seconds)
+    board.refresh()
+    assert board.runs.results is not None
