@@ -187,11 +187,11 @@ COMPARED = (
     ComparedQuantity("longterm_settlement_m", "Long-term settlement", "mm", 1e3),
     ComparedQuantity("longterm_plastic_settlement_m", "… plastic part", "mm", 1e3),
     ComparedQuantity("longterm_consolidation_settlement_m", "… consolidation part", "mm", 1e3),
-    # at or above 1 the settlement is outside the strain laws' range (Results.summary)
     ComparedQuantity("longterm_stress_ratio_max", "Largest q_d/σ_s below the invert", "-", 1.0),
 )
 """Key numbers compared, in column order; a quantity absent from every summary is left out
-(the long-term settlement exists only once the pipeline computes it)."""
+(the long-term settlement exists only once the pipeline computes it). A largest q_d/σ_s at or
+above 1 puts the settlement outside the strain laws' range (``Results.summary``)."""
 
 DIFFERENCE = "Δ"
 PERCENT = "Δ %"
@@ -479,8 +479,7 @@ def read_session(text: str | bytes) -> SessionFile:
     ------
     ValueError
         Not JSON (or nested too deeply), not a session file (format tag), an unknown version, a
-        malformed entry, or a scenario value out of range (the message names the run and the
-        parameter).
+        malformed entry, or a scenario value out of range (naming the run and the parameter).
     """
     if isinstance(text, bytes):
         try:
@@ -508,9 +507,7 @@ def read_session(text: str | bytes) -> SessionFile:
         raise ValueError("bad session file: 'runs' must be a list")
     if len(entries) > MAX_PINNED:
         raise ValueError(f"bad session file: {len(entries)} runs, at most {MAX_PINNED} allowed")
-    runs = []
-    for index, entry in enumerate(entries, start=1):
-        runs.append(_saved_run(entry, index))
+    runs = [_saved_run(entry, index) for index, entry in enumerate(entries, start=1)]
     names = [r.name for r in runs]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates or CURRENT_LABEL in names:
