@@ -32,6 +32,24 @@ def test_a_request_while_idle_runs_at_once(pool):
     assert started == [1] and finished == [(1, 10)] and not runs.busy
 
 
+def _drain_while_job_1_computes(runs, computed, release, meanwhile):
+    """Request job 1, call ``meanwhile()`` once it computes, then let it finish and drain the
+    queue; returns the (started, finished) records."""
+    started, finished = [], []
+
+    async def scenario():
+        assert runs.request(1)
+        draining = asyncio.create_task(runs.drain(*_record(started, finished), poll_s=0.01))
+        while not computed:
+            await asyncio.sleep(0.01)
+        meanwhile()
+        release.set()
+        await draining
+
+    asyncio.run(scenario())
+    return started, finished
+
+
 def test_newest_request_supersedes_a_waiting_one(pool):
     """While job 1 computes, jobs 2, 3, 4 are requested: only 4 runs after 1."""
     release = threading.Event()
@@ -44,18 +62,11 @@ def test_newest_request_supersedes_a_waiting_one(pool):
         return job
 
     runs = LatestRun(compute, pool)
-    started, finished = [], []
 
-    async def scenario():
-        assert runs.request(1)
-        draining = asyncio.create_task(runs.drain(*_record(started, finished), poll_s=0.01))
-        while not computed:
-            await asyncio.sleep(0.01)
+    def request_three_more():
         assert [runs.request(job) for job in (2, 3, 4)] == [False, False, False]
-        release.set()
-        await draining
 
-    asyncio.run(scenario())
+    _, finished = _drain_while_job_1_computes(runs, computed, release, request_three_more)
     assert computed == [1, 4] and [job for job, _ in finished] == [1, 4]
     assert not runs.busy
 
@@ -84,19 +95,12 @@ def test_a_cancelled_queue_drops_its_waiting_job_and_the_computing_ones_outcome(
         return job
 
     runs = LatestRun(compute, pool)
-    started, finished = [], []
 
-    async def scenario():
-        assert runs.request(1)
-        draining = asyncio.create_task(runs.drain(*_record(started, finished), poll_s=0.01))
-        while not computed:
-            await asyncio.sleep(0.01)
+    def request_then_cancel():
         assert runs.request(2) is False
         runs.cancel()
-        release.set()
-        await draining
 
-    asyncio.run(scenario())
+    started, finished = _drain_while_job_1_computes(runs, computed, release, request_then_cancel)
     assert computed == [1] and started == [1] and finished == [] and not runs.busy
     assert runs.request(3) is False and not runs.busy
 
