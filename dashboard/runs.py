@@ -25,6 +25,7 @@ import param
 
 from dashboard import plots
 from dashboard.limits import refuse_long_run
+from dashboard.memory import release_soon
 from dashboard.messages import Messages
 from dashboard.plot_panes import one_message
 from dashboard.scheduler import EXECUTOR, LatestRun, RunCancelled, outcome_of
@@ -240,18 +241,22 @@ class SessionRuns(param.Parameterized):
     async def _drain(self) -> None:
         """Compute the requested runs, refreshing the progress bar meanwhile, then (unless a
         newer change is computing by then) the other tunnel–soil model's run for the depth
-        plot."""
-        await self.latest.drain(
-            self._start, self._finish, tick=self._show_progress, poll_s=PROGRESS_REFRESH_S
-        )
-        if self._companion_wanted is None:
-            return
-        await asyncio.sleep(self.companion_delay_s)  # the page draws the results undisturbed
-        if self.latest.busy:  # a newer change: its own drain asks for its comparison
-            return
-        other, self._companion_wanted = self._companion_wanted, None
-        if other is not None and self.companion.request(other):
-            await self.companion.drain(lambda scenario: None, self._finish_companion)
+        plot. If the session closed meanwhile, the memory goes back once its runs stopped."""
+        try:
+            await self.latest.drain(
+                self._start, self._finish, tick=self._show_progress, poll_s=PROGRESS_REFRESH_S
+            )
+            if self._companion_wanted is None:
+                return
+            await asyncio.sleep(self.companion_delay_s)  # the page draws the results undisturbed
+            if self.latest.busy:  # a newer change: its own drain asks for its comparison
+                return
+            other, self._companion_wanted = self._companion_wanted, None
+            if other is not None and self.companion.request(other):
+                await self.companion.drain(lambda scenario: None, self._finish_companion)
+        finally:
+            if self.latest.cancelled:
+                release_soon(asyncio.get_running_loop().call_later)
 
     def _compute(self, scenario: Scenario) -> Outcome:
         """Run the pipeline with the session's cache (in a worker thread) and look up a stored
@@ -263,11 +268,23 @@ class SessionRuns(param.Parameterized):
 
     def _compute_companion(self, other: Scenario) -> Results | None:
         """The scenario with the other tunnel–soil model (in a worker thread; its vehicle–track
-        and load stages come from the cache). A failure only leaves its curve out."""
+        and load stages come from the cache). A failure only leaves its curve out; a closed
+        session stops it at its next progress report (:class:`RunCancelled`)."""
         try:
-            return run(admitted(other), cache=self.cache)
+            return run(admitted(other), progress=self._check_companion, cache=self.cache)
         except (ValueError, SimulationError):
             return None
+
+    def _check_companion(self, stage: str, fraction: float) -> None:
+        """Progress callback of the other model's run: stop it if the session has closed.
+
+        Raises
+        ------
+        RunCancelled
+            The session has closed.
+        """
+        if self.companion.cancelled:
+            raise RunCancelled(f"the session closed during the {_stage_name(stage)} stage")
 
     def _stale_stages(self, scenario: Scenario) -> set[str]:
         """Stages whose shown output does not belong to ``scenario``."""

@@ -644,6 +644,28 @@ def test_a_closed_sessions_computing_run_stops_at_its_next_progress_report(dashb
     assert stage == "vehicle_track" and 0 < fraction < 1
 
 
+def test_a_closed_sessions_comparison_run_stops_at_its_first_progress_report(dashboard):
+    """The other model's run of a closed session, already handed to the server's workers, stops
+    before it computes anything."""
+    other = dashboard.scenario.copy()
+    other.tunnel.model = "2.5d"
+    dashboard.close()
+    with pytest.raises(RunCancelled, match="the session closed during the vehicle"):
+        dashboard.runs._compute_companion(other)
+
+
+def test_a_closed_sessions_memory_is_given_back_once_its_runs_have_stopped(dashboard, monkeypatch):
+    """The trim at the close comes too early for a run still computing; the end of the
+    session's last run asks for it again."""
+    released = []
+    monkeypatch.setattr(runs_module, "release_soon", lambda call_later: released.append(1))
+    asyncio.run(dashboard.runs._drain())
+    assert released == []  # an open session keeps its memory
+    dashboard.close()
+    asyncio.run(dashboard.runs._drain())
+    assert released == [1]
+
+
 # ---- export.py ------------------------------------------------------------------------------
 # A tag that loads from the network; (Bokeh's own script text mentions a MathJax URL that it
 # fetches only for LaTeX labels, which the report has none of.)
