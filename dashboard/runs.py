@@ -28,7 +28,7 @@ from dashboard.limits import refuse_long_run
 from dashboard.memory import release_soon
 from dashboard.messages import Messages
 from dashboard.plot_panes import one_message
-from dashboard.scheduler import EXECUTOR, LatestRun, RunCancelled, outcome_of
+from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of
 from model import scenarios
 from model.fe.store import FEResult, stored_fe_result
 from model.params import Scenario, ScenarioError
@@ -107,6 +107,11 @@ def admitted(scenario: Scenario) -> Scenario:
 def _stage_name(stage: str) -> str:
     """A pipeline stage's name as shown."""
     return STAGE_NAMES.get(stage, stage)
+
+
+def _during(stage: str) -> str:
+    """Where a cancelled run stopped, for :meth:`LatestRun.stop_if_cancelled`."""
+    return f"the {_stage_name(stage)} stage"
 
 
 class SessionRuns(param.Parameterized):
@@ -269,22 +274,16 @@ class SessionRuns(param.Parameterized):
     def _compute_companion(self, other: Scenario) -> Results | None:
         """The scenario with the other tunnel–soil model (in a worker thread; its vehicle–track
         and load stages come from the cache). A failure only leaves its curve out; a closed
-        session stops it at its next progress report (:class:`RunCancelled`)."""
+        session stops it at its next progress report
+        (:class:`~dashboard.scheduler.RunCancelled`)."""
         try:
-            return run(admitted(other), progress=self._check_companion, cache=self.cache)
+            return run(
+                admitted(other),
+                progress=lambda stage, _: self.companion.stop_if_cancelled(_during(stage)),
+                cache=self.cache,
+            )
         except (ValueError, SimulationError):
             return None
-
-    def _check_companion(self, stage: str, fraction: float) -> None:
-        """Progress callback of the other model's run: stop it if the session has closed.
-
-        Raises
-        ------
-        RunCancelled
-            The session has closed.
-        """
-        if self.companion.cancelled:
-            raise RunCancelled(f"the session closed during the {_stage_name(stage)} stage")
 
     def _stale_stages(self, scenario: Scenario) -> set[str]:
         """Stages whose shown output does not belong to ``scenario``."""
@@ -314,8 +313,7 @@ class SessionRuns(param.Parameterized):
         RunCancelled
             The session has closed.
         """
-        if self.latest.cancelled:
-            raise RunCancelled(f"the session closed during the {_stage_name(stage)} stage")
+        self.latest.stop_if_cancelled(_during(stage))
         self._progress_state = (stage, fraction)
 
     @one_message()

@@ -118,10 +118,22 @@ class LatestRun(Generic[Job, Outcome]):
         """True once :meth:`cancel` was called."""
         return self._cancelled
 
+    def stop_if_cancelled(self, where: str) -> None:
+        """Stop the computing job here once :meth:`cancel` was called: its ``compute`` calls
+        this where it can stop (e.g. at a progress report).
+
+        Raises
+        ------
+        RunCancelled
+            After :meth:`cancel`, naming ``where`` the job stopped.
+        """
+        if self._cancelled:
+            raise RunCancelled(f"the session closed during {where}")
+
     def cancel(self) -> None:
         """Drop the waiting job and every later request; the outcome of the job computing is
-        not handed on (a closed session). The job itself stops where its ``compute`` checks
-        :attr:`cancelled` (raising :class:`RunCancelled`), else it finishes."""
+        not handed on (a closed session). The job itself stops where its ``compute`` calls
+        :meth:`stop_if_cancelled`, else it finishes."""
         with self._lock:
             self._cancelled = True
             self._waiting, self._has_waiting = None, False
