@@ -1,6 +1,6 @@
 """Time the vehicle–track simulation (model/track/vehicle_track.py) and print the figures.
 
-Run: ``python benchmarks/bench_vehicle_track.py [--quick]``. Prints
+Run: ``python benchmarks/bench_vehicle_track.py [--quick | --ratio]``. Prints
 
 1. cold start: a fresh process with an empty Numba cache (compilation) and one with the cache
    filled (loading), for the single-bogie passage;
@@ -14,10 +14,16 @@ Run: ``python benchmarks/bench_vehicle_track.py [--quick]``. Prints
    model uses.
 
 Other processes share the two cores, so every figure is a best of several runs.
+
+``--ratio`` prints only the six-car passage against the plain-NumPy baseline on the same job
+(``tests/vehicle_track_numpy.py``, the same equations as whole-array NumPy expressions; run
+once, the whole passage, its histories checked against the kernels'): the time stepping of both,
+``simulate()`` and the ratio simulate() ÷ baseline (issue 27: ≤ 0.0125).
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -35,7 +41,9 @@ except ImportError:
     rocket_fft = None
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+
+from vehicle_track_numpy import integrate_numpy  # noqa: E402
 
 from model.params import Scenario  # noqa: E402
 from model.track import assembly  # noqa: E402
@@ -203,10 +211,44 @@ def coupling_alternatives(repeats: int) -> None:
         print(f"  {label}: {seconds / reps * 1e6:.2f} µs per step")
 
 
+def numpy_ratio(repeats: int) -> None:
+    """Six-car passage: the kernels (best of ``repeats``) against the NumPy baseline (once)."""
+    scenario = Scenario.preset("paper")
+    dt, n_steps = scenario.numerics.dt, vt.n_time_steps(scenario)
+    track, vehicle = assembly.assemble_track(scenario), assembly.assemble_vehicle(scenario)
+    wheels = assembly.assemble_wheels(scenario, n_steps * dt)
+    vt.simulate(scenario)
+    total = best_of(lambda: vt.simulate(scenario), repeats)
+    stepping, _ = integration_cost(scenario, repeats)
+    state = assembly.static_equilibrium(scenario, track, vehicle, wheels)
+    start = time.perf_counter()
+    reference = integrate_numpy(track, vehicle, wheels, state, n_steps, dt)
+    baseline = time.perf_counter() - start
+    run = vt.integrate(track, vehicle, wheels, state, n_steps, dt)
+    gap = np.abs(run.outputs.block_force - reference["block_force"]).max()
+    print(
+        f"  six-car passage, {n_steps} steps: simulate() {total:.3f} s, time stepping "
+        f"{stepping:.3f} s ({stepping / n_steps * 1e6:.2f} µs/step); NumPy baseline "
+        f"{baseline:.1f} s ({baseline / n_steps * 1e6:.0f} µs/step; invert force equal to "
+        f"{gap / reference['block_force'].max():.0e} of its peak)"
+    )
+    print(
+        f"  ratio simulate() / baseline = {total / baseline:.4f} (target ≤ 0.0125); "
+        f"time stepping / baseline = {stepping / baseline:.4f}"
+    )
+
+
 def main() -> None:
-    quick = "--quick" in sys.argv
-    repeats = 3 if quick else 7
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
+    parser.add_argument("--ratio", action="store_true", help="only the NumPy-baseline ratio")
+    args = parser.parse_args()
     print(f"cores: {os.cpu_count()}, numba {numba.__version__}, numpy {np.__version__}")
+    if args.ratio:
+        numpy_ratio(5)
+        return
+    quick = args.quick
+    repeats = 3 if quick else 7
     print("cold start:")
     cold_start()
     print(f"warm passages (best of {repeats}):")
