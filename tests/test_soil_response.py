@@ -13,6 +13,8 @@ from model.soil.response import (
     depth_sample_bins,
     kernel_interpolation_matrix,
     kernel_sample_bins,
+    padded_load_spectrum,
+    padded_record_grid,
     soil_response,
 )
 from model.soil.section_2d import invert_receptance
@@ -352,6 +354,22 @@ def test_paper_case_peaks_regression_pin(paper_result):
     assert at[0.0] == pytest.approx(7.852733e-3, rel=1e-6, abs=0)
     assert at[11.0] == pytest.approx(4.866645e-3, rel=1e-6, abs=0)
     assert at[35.0] == pytest.approx(3.220132e-3, rel=1e-6, abs=0)
+
+
+def test_a_reused_load_spectrum_gives_the_same_grid_and_another_grids_is_refused():
+    """``padded_load_spectrum`` is the grid's spectrum bit for bit (the pipeline keeps it across
+    soil changes); one made with other numerics has another length and is refused."""
+    scenario = Scenario.paper()
+    dt, _, load, *_ = synthetic_train_load(scenario, duration_s=2.0)
+    numerics = scenario.numerics
+    spectrum = padded_load_spectrum(load, dt, numerics)
+    fresh = padded_record_grid(load, dt, numerics, 35.0)
+    reused = padded_record_grid(load, dt, numerics, 35.0, spectrum)
+    np.testing.assert_array_equal(reused.load_spectrum, fresh.load_spectrum)
+    assert reused.n_out == fresh.n_out and reused.f_hz.size == fresh.f_hz.size
+    other = padded_load_spectrum(load, dt, Numerics(soil_max_frequency=50.0))
+    with pytest.raises(ValueError, match="another record or other numerics"):
+        padded_record_grid(load, dt, numerics, 35.0, other)
 
 
 @pytest.mark.parametrize(

@@ -281,7 +281,9 @@ def _products_into(transfer, load, rows: slice, out) -> None:
     _product_rows(transfer, load, rows.start, rows.stop - rows.start, out)
 
 
-def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float) -> RecordGrid:
+def padded_record_grid(
+    line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float, load_spectrum=None
+) -> RecordGrid:
     """Zero-pad, transform and band-limit a load record (module docstring: record handling).
 
     Parameters
@@ -294,6 +296,10 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
         Uses soil_max_frequency, zero_pad_factor, max_depth.
     s_wave_speed : float
         Soil shear-wave speed c₂ (m/s), which sets the tail kept after the record.
+    load_spectrum : ndarray, optional
+        :func:`padded_load_spectrum` of this record and numerics, to reuse (it does not depend
+        on the soil: :func:`model.pipeline.run` keeps it across soil changes); computed when
+        not given.
 
     Returns
     -------
@@ -302,8 +308,14 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     load = checked_record(line_load_N_per_m, dt_s)
     n_record = load.size
     step, n_out_pad, f_hz = _record_grid_layout(n_record, dt_s, numerics)
+    if load_spectrum is None:
+        load_spectrum = _transformed_record(load, dt_s, step * n_out_pad, f_hz.size)
+    elif np.shape(load_spectrum) != f_hz.shape:
+        raise ValueError(
+            f"load_spectrum has {np.size(load_spectrum)} frequencies, this record's grid "
+            f"{f_hz.size}: it was made for another record or other numerics"
+        )
     dt_out = step * dt_s
-    load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)[1][: f_hz.size].copy()
     record_s = n_record * dt_s
     tail_s = response_tail(numerics.max_depth, s_wave_speed)
     return RecordGrid(
@@ -314,6 +326,33 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
         n_out=min(n_out_pad, math.ceil((record_s + tail_s) / dt_out)),
         record_s=record_s,
     )
+
+
+def padded_load_spectrum(line_load_N_per_m, dt_s: float, numerics) -> np.ndarray:
+    """The load spectrum of :func:`padded_record_grid` (load unit · s), complex (nk,).
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Load record q(t) (N/m), sampled from t = 0 at ``dt_s``.
+    dt_s : float
+        Sampling interval (s), > 0.
+    numerics : model.params.Numerics
+        Uses soil_max_frequency and zero_pad_factor.
+
+    Returns
+    -------
+    ndarray
+        Q(f) at the record grid's frequencies 0 … soil_max_frequency.
+    """
+    load = checked_record(line_load_N_per_m, dt_s)
+    step, n_out_pad, f_hz = _record_grid_layout(load.size, dt_s, numerics)
+    return _transformed_record(load, dt_s, step * n_out_pad, f_hz.size)
+
+
+def _transformed_record(load, dt_s: float, n_fft: int, n_keep: int) -> np.ndarray:
+    """The first ``n_keep`` bins of the record's transform zero-padded to ``n_fft`` samples."""
+    return fourier_transform(load, dt_s, n_fft)[1][:n_keep].copy()
 
 
 def _record_grid_layout(n_record: int, dt_s: float, numerics) -> tuple[int, int, np.ndarray]:

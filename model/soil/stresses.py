@@ -288,7 +288,11 @@ def section_transfer(line_load_N_per_m, dt_s: float, scenario) -> SectionTransfe
 
 
 def section_response(
-    line_load_N_per_m, dt_s: float, scenario, transfer: SectionTransfer | None = None
+    line_load_N_per_m,
+    dt_s: float,
+    scenario,
+    transfer: SectionTransfer | None = None,
+    load_spectrum=None,
 ) -> tuple[SoilResponse, StressResponse]:
     """Displacements and stresses under the invert for a line-load history, one kernel pass.
 
@@ -309,6 +313,9 @@ def section_response(
     transfer : SectionTransfer, optional
         :func:`section_transfer` of a record of the same length and step and the same
         scenario, to reuse; computed when not given.
+    load_spectrum : ndarray, optional
+        :func:`model.soil.response.padded_load_spectrum` of this record and numerics, to
+        reuse; computed when not given.
 
     Returns
     -------
@@ -320,7 +327,9 @@ def section_response(
         ``transfer`` was made on another frequency grid or other depths.
     """
     numerics = scenario.numerics
-    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    grid = padded_record_grid(
+        line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed, load_spectrum
+    )
     depth = output_depths(numerics)
     if transfer is None:
         receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
