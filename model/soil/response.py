@@ -234,14 +234,22 @@ class RecordGrid:
         """(n_rows, n_out) histories x(t) = ∫ X(f) e^{i2πft} df of (n_rows, nk) spectra."""
         return self._inverse_rows(spectra.shape[0], lambda rows: spectra[rows])
 
-    def response_histories(self, transfer: np.ndarray) -> np.ndarray:
+    def response_histories(
+        self, transfer: np.ndarray, minus: np.ndarray | None = None
+    ) -> np.ndarray:
         """(n_columns, n_out) histories of the responses H(f) Q(f) to the grid's load, from
         (nk, n_columns) transfer functions H (the same numbers as ``time_histories`` of the
-        products, without forming them all)."""
+        products, without forming them all); with ``minus`` (the same shape), of the
+        differences (H − minus) Q."""
         load = np.ascontiguousarray(self.load_spectrum)
         columns = np.ascontiguousarray(transfer)
+        other = None if minus is None else np.ascontiguousarray(minus)
         return self._inverse_rows(
-            transfer.shape[1], None, lambda rows, out: _products_into(columns, load, rows, out)
+            transfer.shape[1],
+            None,
+            lambda rows, out: _product_rows(
+                columns, other, load, rows.start, rows.stop - rows.start, out
+            ),
         )
 
     def _inverse_rows(self, n_rows: int, spectra_of, fill=None) -> np.ndarray:
@@ -268,17 +276,16 @@ class RecordGrid:
 
 
 @numba.njit(cache=True)
-def _product_rows(transfer, load, first, count, out):
-    """out[r, k] = transfer[k, first + r] · load[k], r < count (the transposed products)."""
+def _product_rows(transfer, minus, load, first, count, out):
+    """out[r, k] = (transfer − minus)[k, first + r] · load[k], r < count (the transposed
+    products; ``minus`` None: transfer alone)."""
     for k in range(load.size):
         q = load[k]
         for r in range(count):
-            out[r, k] = transfer[k, first + r] * q
-
-
-def _products_into(transfer, load, rows: slice, out) -> None:
-    """The products H(f) Q(f) of the columns ``rows`` of ``transfer`` into ``out``'s rows."""
-    _product_rows(transfer, load, rows.start, rows.stop - rows.start, out)
+            h = transfer[k, first + r]
+            if minus is not None:
+                h = h - minus[k, first + r]
+            out[r, k] = h * q
 
 
 def padded_record_grid(
