@@ -307,9 +307,10 @@ def test_sampled_kernel_converges_to_the_every_frequency_transfer(
       along ξ = ω/v at a subsonic speed the fields are evanescent rather than oscillating, the
       error is 10–100 times smaller and falls faster: 4–9 accepted, observed 6.7–8.0 (4.8–4.9
       when every depth took the deepest one's stride);
-    - at the default N = 12 it is ≤ 1e-4 (observed 1.5e-5 and 1.7e-5 in 2D, ≤ 7e-7 in 2.5D;
+    - at the default N = 8 it is ≤ 2e-4 (observed 1.55e-4 and 1.68e-4 in 2D, 1.3e-5 and
+      7.3e-6 in 2.5D); at N = 12 ≤ 1e-4 (observed 1.5e-5 and 1.7e-5 in 2D, ≤ 7e-7 in 2.5D;
       with the deepest depth's stride for all depths, over soils 2–550 MPa, η_G 0–0.3, depths
-      0–70 m and f_max up to 1 kHz the largest seen was 6e-5).
+      0–70 m and f_max up to 1 kHz the largest seen at N = 12 was 6e-5).
     """
     scenario = Scenario.paper()
     scenario.tunnel.model = model
@@ -342,17 +343,18 @@ def test_sampled_kernel_converges_to_the_every_frequency_transfer(
     assert np.all(np.diff(errors) < 0)
     order = -np.polyfit(np.log(effective), np.log(errors), 1)[0]
     assert 4.0 < order < (7.0 if model == "2d" else 9.0)
-    assert scenario.numerics.param["kernel_samples_per_cycle"].default == counts[-1]
+    default = counts.index(scenario.numerics.param["kernel_samples_per_cycle"].default)
+    assert errors[default] <= 2e-4
     assert errors[-1] <= 1e-4
 
 
 @pytest.mark.parametrize("model", ["2d", "2.5d"])
 def test_sampled_kernel_leaves_the_paper_results_unchanged(paper_load, model):
-    """The paper preset's soil stage (its load, 71 depths) with the default sampling against every
-    frequency: the peak displacement at every depth within 1e-5 relative (observed 3.5e-7 in 2D,
-    7e-9 in 2.5D; 2.5e-7 and 5e-9 when every depth took the deepest one's stride) and the peak
-    deviator q_d within 1e-4 (observed 4.5e-6, 2.8e-8: stresses weigh the higher frequencies,
-    where the interpolation errs, more than displacements do)."""
+    """The paper preset's soil stage (its load, 71 depths) with the default sampling (N = 8)
+    against every frequency: the peak displacement at every depth within 1e-5 relative
+    (observed 3.4e-6 in 2D, 1.5e-7 in 2.5D; 3.5e-7 and 7e-9 at N = 12) and the peak deviator
+    q_d within 1e-4 (observed 4.7e-5, 4.1e-7; 4.5e-6, 2.8e-8 at N = 12: stresses weigh the
+    higher frequencies, where the interpolation errs, more than displacements do)."""
     scenario = Scenario.paper()
     scenario.tunnel.model = model
     exact = _transfer(paper_load, scenario, 0)
@@ -369,8 +371,9 @@ def test_peak_results_converge_with_the_kernel_sampling(paper_load, model):
     kernel samples per cycle against the kernel at every frequency. The largest relative error
     over the depths of the peak displacement and of the peak deviator q_d falls like N^−p, p
     fitted over the four: 5–7 in 2D (6-point Lagrange, observed 5.8 and 5.9), 5–9 in 2.5D
-    (evanescent fields, observed 7.9 and 7.0). At the default N = 12: peak displacement
-    ≤ 1e-6 (observed 3.5e-7 in 2D, 7e-9 in 2.5D), peak deviator ≤ 1e-5 (4.5e-6, 2.8e-8)."""
+    (evanescent fields, observed 7.9 and 7.0). At the default N = 8: peak displacement
+    ≤ 1e-5 (observed 3.4e-6 in 2D, 1.5e-7 in 2.5D), peak deviator ≤ 1e-4 (4.7e-5, 4.1e-7);
+    at N = 12 ≤ 1e-6 and ≤ 1e-5 (observed 3.5e-7, 7e-9 and 4.5e-6, 2.8e-8)."""
     scenario = Scenario.paper()
     scenario.tunnel.model = model
     soil_exact, stress_exact = stresses.section_response(
@@ -390,8 +393,11 @@ def test_peak_results_converge_with_the_kernel_sampling(paper_load, model):
         order = -np.polyfit(np.log(counts), np.log(errors), 1)[0]
         assert 5.0 < order < upper
     default = list(counts).index(scenario.numerics.kernel_samples_per_cycle)
-    assert peak_errors[default] <= 1e-6
-    assert deviator_errors[default] <= 1e-5
+    assert peak_errors[default] <= 1e-5
+    assert deviator_errors[default] <= 1e-4
+    twelve = list(counts).index(12)
+    assert peak_errors[twelve] <= 1e-6
+    assert deviator_errors[twelve] <= 1e-5
 
 
 # ---- strain laws and settlement: worked example and exact properties ---------------------------
