@@ -369,7 +369,11 @@ def _record_grid_layout(n_record: int, dt_s: float, numerics) -> tuple[int, int,
     n_out_pad = scipy.fft.next_fast_len(
         math.ceil(numerics.zero_pad_factor * n_record / step), real=True
     )
-    f_hz = scipy.fft.rfftfreq(step * n_out_pad, dt_s)
+    # scipy.fft.rfftfreq(step · n_out_pad, dt_s)'s values (k · val), only as far as f_max: the
+    # whole grid of the undecimated record would be ~10⁵–10⁶ bins for ~10³ kept
+    n_fft = step * n_out_pad
+    val = 1.0 / (n_fft * dt_s)
+    f_hz = np.arange(min(n_fft // 2 + 1, math.floor(f_max / val) + 3)) * val
     n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
     if n_keep < 2:
         raise ValueError(
