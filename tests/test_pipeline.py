@@ -237,7 +237,7 @@ def test_the_axis_depth_re_runs_the_long_term_stage_only(cheap_scenario, model):
 
 @pytest.mark.parametrize("model", ["2d", "2.5d"])
 def test_kernel_sampling_changes_the_soil_keys_only(model):
-    """The kernel sampling changes the transfer functions (tests/test_longterm.py): a cached
+    """The kernel sampling changes the transfer functions (tests/test_soil_sampling.py): a cached
     soil stage or transfer made with another sampling must not be served."""
     scenario = Scenario.paper()
     scenario.tunnel.model = model

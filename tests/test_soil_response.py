@@ -332,7 +332,7 @@ def test_outputs_have_the_documented_shapes_grids_and_spectra(paper_result):
         result.line_load_amplitude_N_per_m_per_hz, np.abs(load_spectrum[: f.size]), rtol=1e-12
     )
     # bins where the kernel is evaluated for the interface, the last included (the bins
-    # between are interpolated, tests/test_longterm.py)
+    # between are interpolated, tests/test_soil_sampling.py)
     bins, groups = depth_sample_bins(f, result.depth_m, scenario.tunnel, scenario.soil, numerics)
     sampled = next(bins[nodes] for group, nodes in groups if 0 in np.arange(n_depths)[group])
     bins = sampled[[1, sampled.size // 4, -1]]
@@ -348,7 +348,7 @@ def test_paper_case_peaks_regression_pin(paper_result):
     loads on a Winkler track, no irregularity). The direct-integral test bounds their error
     (≤ 1 % low); the pin only guards against unnoticed changes (rtol 1e-6). Re-pinned when the
     default kernel sampling went from 12 to 8 samples per cycle: 35 m moved by 3.5e-6
-    (3.220132 → 3.220143 mm, within the sampling error tests/test_longterm.py states)."""
+    (3.220132 → 3.220143 mm, within the sampling error tests/test_soil_sampling.py states)."""
     _, _, _, result = paper_result
     at = {
         depth: result.peak_disp_m[np.argmin(np.abs(result.depth_m - depth))]

@@ -154,7 +154,7 @@ class Numerics(param.Parameterized):
         "it at every frequency. Bounds 6–1024 or 0: with fewer than 6 samples per cycle the "
         "interpolation errs by up to 1 % of the transfer functions (docs/tunnel_soil.md); 8 "
         "keeps their error below 2e-4 and that of the peak displacement and peak deviator "
-        "below 1e-5 and 1e-4 on the paper case (tests/test_longterm.py; 12: 2e-5, 4e-7, 5e-6 "
+        "below 1e-5 and 1e-4 on the paper case (tests/test_soil_sampling.py; 12: 2e-5, 4e-7, 5e-6 "
         "with 1.5 times the kernel evaluations).",
     )
     ground_max_distance = _q(
