@@ -33,7 +33,12 @@ from model.params.measured_profile import profile_digest
 from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
 from model.soil.ground_vibration import GroundResponse, ground_summary
 from model.soil.halfspace_response import halfspace_response, halfspace_transfer
-from model.soil.response import COMPARISON_DEPTH_M, SoilResponse, response_tail
+from model.soil.response import (
+    COMPARISON_DEPTH_M,
+    SoilResponse,
+    padded_load_spectrum,
+    response_tail,
+)
 from model.soil.stresses import StressResponse, section_response, section_transfer
 from model.spectra import one_sided_psd
 from model.track.vehicle_track import VehicleTrackResult, check_inputs, simulate
@@ -164,6 +169,11 @@ class Results:
 # on the record's frequency grid, cached apart from the load so that runs differing only in the
 # load (seed, vehicle, track) reuse it. Its entries are large (tens of MB), hence few.
 TRANSFER = "soil_transfer"
+# Nor is the spectrum of the zero-padded load record: it depends on the load and the record
+# grid's numerics, not on the soil, so a soil change reuses it (a small entry).
+LOAD_SPECTRUM = "load_spectrum"
+# Numerics of the record grid (model.soil.response.padded_load_spectrum).
+RECORD_GRID_NUMERICS = ("soil_max_frequency", "zero_pad_factor")
 
 
 class StageCache:
@@ -185,7 +195,7 @@ class StageCache:
     def __init__(self, size: int = 4, transfer_size: int = 2):
         self.size, self.transfer_size = size, transfer_size
         self._lock = threading.Lock()
-        names = (*STAGES, TRANSFER)
+        names = (*STAGES, TRANSFER, LOAD_SPECTRUM)
         self._entries: dict[str, OrderedDict[str, Any]] = {s: OrderedDict() for s in names}
         self._computing: dict[tuple[str, str], Future] = {}
         self.hits = dict.fromkeys(names, 0)
@@ -310,10 +320,13 @@ def stage_keys(scenario: Scenario) -> dict[str, str]:
     # the transfer functions: the soil stage's inputs but the load, whose record's length and
     # step (which set the frequency grid) run() appends
     transfer = {name: value for name, value in soil.items() if name != "upstream"}
+    spectrum = {"upstream": load, "numerics": pick(RECORD_GRID_NUMERICS)}
     return {
         name: json.dumps(value, sort_keys=True)
         for name, value in zip(
-            (*STAGES, TRANSFER), (vehicle_track, load, soil, longterm, transfer), strict=True
+            (*STAGES, TRANSFER, LOAD_SPECTRUM),
+            (vehicle_track, load, soil, longterm, transfer, spectrum),
+            strict=True,
         )
     }
 
@@ -410,7 +423,12 @@ def run(
             f"{keys[TRANSFER]} record {q.size} × {dt!r} s",
             lambda: _read_only(transfer_of(q, dt, scenario)),
         )
-        return respond(q, dt, scenario, transfer)
+        spectrum, _ = cache.fetch(
+            LOAD_SPECTRUM,
+            keys[LOAD_SPECTRUM],
+            lambda: _read_only(padded_load_spectrum(q, dt, scenario.numerics)),
+        )
+        return respond(q, dt, scenario, transfer, spectrum)
 
     soil, stress, ground = stage("soil", soil_stage)
     longterm = stage("longterm", lambda: long_term_settlement(stress, scenario))
@@ -435,10 +453,13 @@ def run(
 
 
 def _read_only(stage_result):
-    """The stage result (a dataclass, or a tuple of them and None) with every array in it,
-    nested dataclasses included, made read-only."""
+    """The stage result (a dataclass, an array, or a tuple of them and None) with every array
+    in it, nested dataclasses included, made read-only."""
     if stage_result is None:
         return None
+    if isinstance(stage_result, np.ndarray):
+        stage_result.flags.writeable = False
+        return stage_result
     if isinstance(stage_result, tuple):
         for part in stage_result:
             _read_only(part)

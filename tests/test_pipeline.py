@@ -76,6 +76,12 @@ def test_cache_serves_exactly_the_stages_a_change_does_not_touch(cheap_scenario)
     assert soil_change.cached_stages == ("vehicle_track", "load")
     assert soil_change.vehicle_track.block_force_N is first.vehicle_track.block_force_N
     assert not np.allclose(soil_change.soil.peak_disp_m, first.soil.peak_disp_m)
+    # the load's spectrum was served: the same numbers as a run from scratch
+    fresh = run(scenario, cache=None)
+    np.testing.assert_array_equal(soil_change.soil.disp_m, fresh.soil.disp_m)
+    np.testing.assert_array_equal(
+        soil_change.stress.deviator_history_Pa, fresh.stress.deviator_history_Pa
+    )
 
     scenario.tunnel.thickness = 0.35
     assert run(scenario, cache=cache).cached_stages == ("vehicle_track", "load")
@@ -87,9 +93,12 @@ def test_cache_serves_exactly_the_stages_a_change_does_not_touch(cheap_scenario)
     assert run(scenario, cache=cache).cached_stages == ()
     downstream = {"soil": 5, "longterm": 5}
     transfer = {pipeline.TRANSFER: 5}  # each soil computation above had new soil inputs
-    assert cache.misses == {"vehicle_track": 2, "load": 3, **downstream, **transfer}
+    # the padded load's spectrum: new with each new load, reused by the soil and tunnel changes
+    spectrum = {pipeline.LOAD_SPECTRUM: 3}
+    assert cache.misses == {"vehicle_track": 2, "load": 3, **downstream, **transfer, **spectrum}
     assert cache.hits == {
-        "vehicle_track": 4, "load": 3, **dict.fromkeys(downstream, 1), pipeline.TRANSFER: 0
+        "vehicle_track": 4, "load": 3, **dict.fromkeys(downstream, 1), pipeline.TRANSFER: 0,
+        pipeline.LOAD_SPECTRUM: 2,
     }  # fmt: skip
 
 
@@ -228,7 +237,7 @@ def test_the_axis_depth_re_runs_the_long_term_stage_only(cheap_scenario, model):
 
 @pytest.mark.parametrize("model", ["2d", "2.5d"])
 def test_kernel_sampling_changes_the_soil_keys_only(model):
-    """The kernel sampling changes the transfer functions (tests/test_longterm.py): a cached
+    """The kernel sampling changes the transfer functions (tests/test_soil_sampling.py): a cached
     soil stage or transfer made with another sampling must not be served."""
     scenario = Scenario.paper()
     scenario.tunnel.model = model

@@ -192,7 +192,11 @@ def halfspace_transfer(line_load_N_per_m, dt_s: float, scenario) -> HalfspaceTra
 
 
 def halfspace_response(
-    line_load_N_per_m, dt_s: float, scenario, transfer: HalfspaceTransfer | None = None
+    line_load_N_per_m,
+    dt_s: float,
+    scenario,
+    transfer: HalfspaceTransfer | None = None,
+    load_spectrum=None,
 ) -> tuple[SoilResponse, StressResponse, GroundResponse]:
     """Displacements and stresses under the invert and vibration at the ground surface.
 
@@ -209,6 +213,9 @@ def halfspace_response(
     transfer : HalfspaceTransfer, optional
         :func:`halfspace_transfer` of a record of the same length and step and the same
         scenario, to reuse; computed when not given.
+    load_spectrum : ndarray, optional
+        :func:`model.soil.response.padded_load_spectrum` of this record and numerics, to
+        reuse; computed when not given.
 
     Returns
     -------
@@ -222,7 +229,9 @@ def halfspace_response(
         ``transfer`` was made on another frequency grid, other depths or other distances.
     """
     numerics = scenario.numerics
-    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    grid = padded_record_grid(
+        line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed, load_spectrum
+    )
     depth, distance = output_depths(numerics), ground_distances(numerics)
     if transfer is None:
         transfer = halfspace_transfer(line_load_N_per_m, dt_s, scenario)

@@ -234,14 +234,22 @@ class RecordGrid:
         """(n_rows, n_out) histories x(t) = ∫ X(f) e^{i2πft} df of (n_rows, nk) spectra."""
         return self._inverse_rows(spectra.shape[0], lambda rows: spectra[rows])
 
-    def response_histories(self, transfer: np.ndarray) -> np.ndarray:
+    def response_histories(
+        self, transfer: np.ndarray, minus: np.ndarray | None = None
+    ) -> np.ndarray:
         """(n_columns, n_out) histories of the responses H(f) Q(f) to the grid's load, from
         (nk, n_columns) transfer functions H (the same numbers as ``time_histories`` of the
-        products, without forming them all)."""
+        products, without forming them all); with ``minus`` (the same shape), of the
+        differences (H − minus) Q."""
         load = np.ascontiguousarray(self.load_spectrum)
         columns = np.ascontiguousarray(transfer)
+        other = None if minus is None else np.ascontiguousarray(minus)
         return self._inverse_rows(
-            transfer.shape[1], None, lambda rows, out: _products_into(columns, load, rows, out)
+            transfer.shape[1],
+            None,
+            lambda rows, out: _product_rows(
+                columns, other, load, rows.start, rows.stop - rows.start, out
+            ),
         )
 
     def _inverse_rows(self, n_rows: int, spectra_of, fill=None) -> np.ndarray:
@@ -268,20 +276,21 @@ class RecordGrid:
 
 
 @numba.njit(cache=True)
-def _product_rows(transfer, load, first, count, out):
-    """out[r, k] = transfer[k, first + r] · load[k], r < count (the transposed products)."""
+def _product_rows(transfer, minus, load, first, count, out):
+    """out[r, k] = (transfer − minus)[k, first + r] · load[k], r < count (the transposed
+    products; ``minus`` None: transfer alone)."""
     for k in range(load.size):
         q = load[k]
         for r in range(count):
-            out[r, k] = transfer[k, first + r] * q
+            h = transfer[k, first + r]
+            if minus is not None:
+                h = h - minus[k, first + r]
+            out[r, k] = h * q
 
 
-def _products_into(transfer, load, rows: slice, out) -> None:
-    """The products H(f) Q(f) of the columns ``rows`` of ``transfer`` into ``out``'s rows."""
-    _product_rows(transfer, load, rows.start, rows.stop - rows.start, out)
-
-
-def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float) -> RecordGrid:
+def padded_record_grid(
+    line_load_N_per_m, dt_s: float, numerics, s_wave_speed: float, load_spectrum=None
+) -> RecordGrid:
     """Zero-pad, transform and band-limit a load record (module docstring: record handling).
 
     Parameters
@@ -294,6 +303,10 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
         Uses soil_max_frequency, zero_pad_factor, max_depth.
     s_wave_speed : float
         Soil shear-wave speed c₂ (m/s), which sets the tail kept after the record.
+    load_spectrum : ndarray, optional
+        :func:`padded_load_spectrum` of this record and numerics, to reuse (it does not depend
+        on the soil: :func:`model.pipeline.run` keeps it across soil changes); computed when
+        not given.
 
     Returns
     -------
@@ -302,8 +315,14 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     load = checked_record(line_load_N_per_m, dt_s)
     n_record = load.size
     step, n_out_pad, f_hz = _record_grid_layout(n_record, dt_s, numerics)
+    if load_spectrum is None:
+        load_spectrum = _transformed_record(load, dt_s, step * n_out_pad, f_hz.size)
+    elif np.shape(load_spectrum) != f_hz.shape:
+        raise ValueError(
+            f"load_spectrum has {np.size(load_spectrum)} frequencies, this record's grid "
+            f"{f_hz.size}: it was made for another record or other numerics"
+        )
     dt_out = step * dt_s
-    load_spectrum = fourier_transform(load, dt_s, step * n_out_pad)[1][: f_hz.size].copy()
     record_s = n_record * dt_s
     tail_s = response_tail(numerics.max_depth, s_wave_speed)
     return RecordGrid(
@@ -316,6 +335,33 @@ def padded_record_grid(line_load_N_per_m, dt_s: float, numerics, s_wave_speed: f
     )
 
 
+def padded_load_spectrum(line_load_N_per_m, dt_s: float, numerics) -> np.ndarray:
+    """The load spectrum of :func:`padded_record_grid` (load unit · s), complex (nk,).
+
+    Parameters
+    ----------
+    line_load_N_per_m : array_like
+        Load record q(t) (N/m), sampled from t = 0 at ``dt_s``.
+    dt_s : float
+        Sampling interval (s), > 0.
+    numerics : model.params.Numerics
+        Uses soil_max_frequency and zero_pad_factor.
+
+    Returns
+    -------
+    ndarray
+        Q(f) at the record grid's frequencies 0 … soil_max_frequency.
+    """
+    load = checked_record(line_load_N_per_m, dt_s)
+    step, n_out_pad, f_hz = _record_grid_layout(load.size, dt_s, numerics)
+    return _transformed_record(load, dt_s, step * n_out_pad, f_hz.size)
+
+
+def _transformed_record(load, dt_s: float, n_fft: int, n_keep: int) -> np.ndarray:
+    """The first ``n_keep`` bins of the record's transform zero-padded to ``n_fft`` samples."""
+    return fourier_transform(load, dt_s, n_fft)[1][:n_keep].copy()
+
+
 def _record_grid_layout(n_record: int, dt_s: float, numerics) -> tuple[int, int, np.ndarray]:
     """(decimation step k, padded length on the output grid, kept frequencies) of a record."""
     f_max = numerics.soil_max_frequency
@@ -323,7 +369,11 @@ def _record_grid_layout(n_record: int, dt_s: float, numerics) -> tuple[int, int,
     n_out_pad = scipy.fft.next_fast_len(
         math.ceil(numerics.zero_pad_factor * n_record / step), real=True
     )
-    f_hz = scipy.fft.rfftfreq(step * n_out_pad, dt_s)
+    # scipy.fft.rfftfreq(step · n_out_pad, dt_s)'s values (k · val), only as far as f_max: the
+    # whole grid of the undecimated record would be ~10⁵–10⁶ bins for ~10³ kept
+    n_fft = step * n_out_pad
+    val = 1.0 / (n_fft * dt_s)
+    f_hz = np.arange(min(n_fft // 2 + 1, math.floor(f_max / val) + 3)) * val
     n_keep = min(int(np.searchsorted(f_hz, f_max, side="right")), n_out_pad // 2 + 1)
     if n_keep < 2:
         raise ValueError(

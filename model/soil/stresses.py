@@ -192,13 +192,17 @@ def deviator_stress(
     ndarray
         q in the unit of the stresses, ≥ 0.
     """
-    rr, tt, xx, rt, rx, tx = np.broadcast_arrays(
-        *(
-            np.asarray(c, dtype=float)
-            for c in (sigma_rr, sigma_thetatheta, sigma_xx, sigma_rtheta, sigma_rx, sigma_thetax)
-        )
+    rr, tt, xx = (np.asarray(c, dtype=float) for c in (sigma_rr, sigma_thetatheta, sigma_xx))
+    return _deviator_of_differences(rr - tt, tt - xx, sigma_rtheta, sigma_rx, sigma_thetax)
+
+
+def _deviator_of_differences(rr_tt, tt_xx, sigma_rtheta, sigma_rx, sigma_thetax) -> np.ndarray:
+    """:func:`deviator_stress` from the normal-stress differences σ_rr − σ_θθ and σ_θθ − σ_xx
+    (σ_xx − σ_rr is minus their sum) and the shear components, broadcast together."""
+    rr_tt, tt_xx, rt, rx, tx = np.broadcast_arrays(
+        *(np.asarray(c, dtype=float) for c in (rr_tt, tt_xx, sigma_rtheta, sigma_rx, sigma_thetax))
     )
-    j2 = ((rr - tt) ** 2 + (tt - xx) ** 2 + (xx - rr) ** 2) / 6.0 + rt**2 + rx**2 + tx**2
+    j2 = (rr_tt**2 + tt_xx**2 + (rr_tt + tt_xx) ** 2) / 6.0 + rt**2 + rx**2 + tx**2
     return np.sqrt(3.0 * j2)
 
 
@@ -288,7 +292,11 @@ def section_transfer(line_load_N_per_m, dt_s: float, scenario) -> SectionTransfe
 
 
 def section_response(
-    line_load_N_per_m, dt_s: float, scenario, transfer: SectionTransfer | None = None
+    line_load_N_per_m,
+    dt_s: float,
+    scenario,
+    transfer: SectionTransfer | None = None,
+    load_spectrum=None,
 ) -> tuple[SoilResponse, StressResponse]:
     """Displacements and stresses under the invert for a line-load history, one kernel pass.
 
@@ -309,6 +317,9 @@ def section_response(
     transfer : SectionTransfer, optional
         :func:`section_transfer` of a record of the same length and step and the same
         scenario, to reuse; computed when not given.
+    load_spectrum : ndarray, optional
+        :func:`model.soil.response.padded_load_spectrum` of this record and numerics, to
+        reuse; computed when not given.
 
     Returns
     -------
@@ -320,7 +331,9 @@ def section_response(
         ``transfer`` was made on another frequency grid or other depths.
     """
     numerics = scenario.numerics
-    grid = padded_record_grid(line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed)
+    grid = padded_record_grid(
+        line_load_N_per_m, dt_s, numerics, scenario.soil.s_wave_speed, load_spectrum
+    )
     depth = output_depths(numerics)
     if transfer is None:
         receptance, stresses = _grid_transfer(grid.f_hz, depth, scenario)
@@ -337,14 +350,19 @@ def section_response(
 def _deviator_response(grid, depth, stresses: StressField) -> StressResponse:
     """Deviator histories, peaks and rainflow counts from stress transfer functions on a grid.
 
-    Components that vanish identically (σ_rθ, σ_θx at θ = 0; σ_rx in 2D) are not transformed.
+    Only the normal-stress differences σ_rr − σ_θθ and σ_θθ − σ_xx enter the deviator: they
+    are transformed (two histories per depth, not three), and so are the shear components that
+    do not vanish identically (σ_rθ, σ_θx vanish at θ = 0, σ_rx in 2D).
     """
-    zero = np.zeros((depth.size, grid.n_out))
-    histories = [
-        grid.response_histories(component) if np.any(component) else zero
-        for component in stress_components(stresses)
+    differences = [
+        grid.response_histories(stresses.sigma_rr, stresses.sigma_thetatheta),
+        grid.response_histories(stresses.sigma_thetatheta, stresses.sigma_xx),
     ]
-    deviator = deviator_stress(*histories)
+    shears = [
+        grid.response_histories(component) if np.any(component) else 0.0
+        for component in (stresses.sigma_rtheta, stresses.sigma_rx, stresses.sigma_thetax)
+    ]
+    deviator = _deviator_of_differences(*differences, *shears)
     return StressResponse(
         depth_m=depth,
         t_s=np.arange(grid.n_out) * grid.dt_out,
