@@ -17,7 +17,7 @@ import panel as pn
 import param
 
 from dashboard.plot_panes import PlotPanes, PlotsView
-from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
+from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec, scenario_of
 from model.pipeline import Results
 from model.soil.ground_vibration import LEVEL_FLOOR_DB
 
@@ -189,9 +189,9 @@ def ground_statement(results: Results, criterion_db: float | None = None) -> str
     ground = results.ground
     if ground is None:
         return NO_GROUND
-    far = ground.distance_m[-1]
+    far, axis_depth = ground.distance_m[-1], scenario_of(results).tunnel.axis_depth
     lines = [
-        f"**Ground surface, tunnel axis {results.scenario.tunnel.axis_depth:g} m deep:** overall "
+        f"**Ground surface, tunnel axis {axis_depth:g} m deep:** overall "
         f"velocity level {ground.overall_level_dB[0]:.1f} dB above the axis, "
         f"{ground.overall_level_dB[-1]:.1f} dB at {far:g} m (re 1e-9 m/s, averaged over the "
         f"{ground.averaging_s:.2f} s passage); peak velocity "
@@ -212,7 +212,8 @@ def ground_statement(results: Results, criterion_db: float | None = None) -> str
         f"{ground.free_surface_effect:+.0%} from the full-space value (pipe-in-pipe: the "
         "tunnel does not scatter the reflected waves, docs/halfspace.md)."
     )
-    speed, shear = results.scenario.train.speed, results.scenario.soil.s_wave_speed
+    scenario = scenario_of(results)
+    speed, shear = scenario.train.speed, scenario.soil.s_wave_speed
     regime = (SUBSONIC if speed < shear else SUPERSONIC).format(
         speed=speed * KMH_PER_M_S, shear=shear * KMH_PER_M_S
     )

@@ -28,7 +28,7 @@ import panel as pn
 import param
 
 from dashboard.limits import reserve_local_cluster, whole_number_input
-from dashboard.plots import MM
+from dashboard.plots import MM, scenario_of
 from dashboard.scheduler import EXECUTOR, outcome_of
 from dashboard.site_view import SETTLEMENT, YEARS, settlement_components_plot
 from model.longterm.settlement import long_term_settlement
@@ -270,7 +270,7 @@ class SettlementBandPanel(pn.viewable.Viewer):
         if self._results is None:
             self.plan.object = "A band needs results on screen first."
             return
-        scenario = self._results.scenario
+        scenario = scenario_of(self._results)
         try:
             n_draws, n_seeds = self.counts()
             if self._draw_seconds is None:

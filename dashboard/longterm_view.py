@@ -23,7 +23,14 @@ from bokeh.models import CustomJSTickFormatter
 from dashboard.limits import TRIAXIAL_CSV_BYTES, refuse_oversized
 from dashboard.longterm_checks import SettlementBandPanel, SmoothRailPanel, settlement_plot
 from dashboard.plot_panes import PlotPanes, PlotsView
-from dashboard.plots import MM, PLOT_MIN_WIDTH, PLOT_OPTIONS, PlotSpec, legend_options
+from dashboard.plots import (
+    MM,
+    PLOT_MIN_WIDTH,
+    PLOT_OPTIONS,
+    PlotSpec,
+    legend_options,
+    scenario_of,
+)
 from dashboard.site_view import (
     DEFAULT_YEARS,
     SITE_PLOTS,
@@ -87,7 +94,7 @@ def strain_depth_plot(results: Results) -> hv.Overlay:
     layers = [curve, *_depth90_line(results, lt.strain_percent, strain)]
     layers.append(layer_boundary_lines(results))
     return hv.Overlay(layers).opts(
-        title=f"Permanent strain after {results.scenario.longterm.years:g} years",
+        title=f"Permanent strain after {scenario_of(results).longterm.years:g} years",
         **_depth_plot_options(),
         **legend_options([layer.label for layer in layers if layer.label]),
         **PLOT_OPTIONS,
@@ -135,7 +142,7 @@ def law_statement(results: Results) -> str:
         f"**Law:** {lt.statement}",
         f"**{lt.pore_pressure_statement.partition(':')[0]}:**"
         f"{lt.pore_pressure_statement.partition(':')[2]}",
-        f"**Settlement at the invert after {results.scenario.longterm.years:g} years"
+        f"**Settlement at the invert after {scenario_of(results).longterm.years:g} years"
         f"{f' ({OUTSIDE_LAW_RANGE})' if lt.outside_law_range else ''}:** "
         f"{lt.settlement_m[-1] * MM:.3g} mm = {lt.plastic_settlement_m[-1] * MM:.3g} mm plastic "
         f"+ {lt.consolidation_settlement_m[-1] * MM:.3g} mm consolidation; 90 % of it within "

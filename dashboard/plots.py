@@ -19,7 +19,7 @@ import numpy as np
 
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.fe.store import FEResult
-from model.params import DATA_DIR, Soil
+from model.params import DATA_DIR, Scenario, Soil
 from model.pipeline import Results
 
 REFERENCE_FILE = DATA_DIR / "paper_reference.json"
@@ -102,6 +102,24 @@ REFERENCE_COLOUR = "#555555"
 REFERENCE_LINE_COLOUR = "#888888"  # dashed, lighter: it often runs over the black current run
 OTHER_MODEL_COLOUR = REFERENCE_LINE_COLOUR  # the other tunnel–soil model: faint, behind
 FE_COLOUR = "#8c564b"  # a stored FE result of the same scenario
+
+
+_SCENARIOS: dict[int, Scenario] = {}
+"""Parsed scenarios by id of their Results, each dropped with its Results."""
+
+
+def scenario_of(results: Results) -> Scenario:
+    """The scenario of ``results``, to read only: parsed once per Results and shared.
+
+    ``results.scenario`` parses the JSON anew on each call (6 ms on the paper case), and the
+    page read it seven times to show one run.
+    """
+    key = id(results)
+    scenario = _SCENARIOS.get(key)
+    if scenario is None:
+        scenario = _SCENARIOS[key] = results.scenario
+        weakref.finalize(results, _SCENARIOS.pop, key, None)
+    return scenario
 
 
 @dataclass(frozen=True)
@@ -325,7 +343,7 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
 def _load_psd_curve(results: Results, label: str) -> hv.Curve:
     """Line-load PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("load_psd", label="PSD", unit="(kN/m)²/Hz")
-    top = results.scenario.numerics.soil_max_frequency
+    top = scenario_of(results).numerics.soil_max_frequency
     return _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, label, top)
 
 
@@ -338,7 +356,7 @@ def load_psd_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Cur
 def _interface_psd_curve(results: Results, label: str) -> hv.Curve:
     """Interface displacement PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("interface_psd", label="PSD", unit="mm²/Hz")
-    top = results.scenario.numerics.soil_max_frequency
+    top = scenario_of(results).numerics.soil_max_frequency
     return _psd_curve(results.soil.f_hz, results.soil.interface_psd, dim, MM**2, label, top)
 
 
@@ -396,10 +414,12 @@ def depth_profile_plot(
     of the same scenario (``fe_result``, model.fe) as a dotted curve."""
     reference = paper_reference() if reference is None else reference
     # the current run is named by its model whether the other model's curve is there or not
-    current_label = "This model" if results is None else MODEL_NAMES[results.scenario.tunnel.model]
+    current_label = (
+        "This model" if results is None else MODEL_NAMES[scenario_of(results).tunnel.model]
+    )
     layers = run_layers(_depth_curve, results, current_label, overlays)
     if other_model is not None:
-        name = MODEL_NAMES[other_model.scenario.tunnel.model]
+        name = MODEL_NAMES[scenario_of(other_model).tunnel.model]
         layers.insert(
             0,
             _depth_curve(other_model, name).opts(

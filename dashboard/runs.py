@@ -412,7 +412,7 @@ class SessionRuns(param.Parameterized):
                 f'data-seconds="{results.stage_seconds.get(stage, 0.0):.4f}">'
                 f"{_stage_name(stage)}: {took}</span>"
             )
-        other = plots.MODEL_NAMES[OTHER_MODEL[results.scenario.tunnel.model]]
+        other = plots.MODEL_NAMES[OTHER_MODEL[plots.scenario_of(results).tunnel.model]]
         parts.append(
             f'<span class="comparison-status" data-state="{self.comparison_state}">'
             f"{html.escape(other)} on the depth plot: {self.comparison_state}</span>"

@@ -156,7 +156,8 @@ class LatestRun(Generic[Job, Outcome]):
     ) -> None:
         """Compute jobs until none waits: ``started(job)``, then ``finished(job, outcome)``.
 
-        ``tick()`` is called every ``poll_s`` seconds while a job computes (progress display).
+        ``tick()`` is called every ``poll_s`` seconds while a job computes (progress display),
+        not once it has finished.
         The callbacks run in the awaiting event loop, never in a worker thread.
         """
         try:
@@ -168,7 +169,8 @@ class LatestRun(Generic[Job, Outcome]):
                 future = asyncio.wrap_future(self._executor.submit(outcome_of, self._compute, job))
                 while not future.done():
                     await asyncio.wait([future], timeout=poll_s)
-                    if tick is not None and not self._cancelled:
+                    # no progress shown once it is done: its results follow at once
+                    if tick is not None and not self._cancelled and not future.done():
                         tick()
                 if not self._cancelled:
                     finished(job, future.result())

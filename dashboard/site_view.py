@@ -24,7 +24,7 @@ import param
 from bokeh.models.widgets.tables import HTMLTemplateFormatter
 
 from dashboard.limits import BOREHOLE_CSV_BYTES, refuse_oversized
-from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec
+from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec, scenario_of
 from model.params import LAYER_PROPERTIES, Layer, Site
 from model.params.borehole import borehole_csv, parse_borehole_csv
 from model.params.display import LAYER_PATH, display_label, display_unit
@@ -88,7 +88,7 @@ def settlement_components_plot(results: Results, behind=(), over=()) -> hv.Overl
             color=TOTAL_COLOUR, line_width=2, framewise=True
         ),
     ]
-    final = results.scenario.longterm.years
+    final = scenario_of(results).longterm.years
     parts, total_line = layers[:2], layers[2]
     return hv.Overlay([*parts, *behind, total_line, *over]).opts(
         title=f"Train-induced settlement: {total[-1]:.3g} mm after {final:g} years",
