@@ -97,6 +97,10 @@ def test_a_table_edit_reruns_and_a_refused_one_says_why(site_page):
         "(before) => !document.body.innerText.includes(before)", arg=before, timeout=RUN_WAIT_MS
     )
     expect(cell).to_have_text("25")
+    # The other tunnel–soil model's run may follow and redraw the tab; edit once the page is
+    # settled, as a user would (in one CI run the second edit, typed while the page may still
+    # have been updating, brought no refusal within 120 s).
+    page.locator('.comparison-status:not([data-state="computing"])').wait_for(timeout=RUN_WAIT_MS)
     cell.click()
     page.keyboard.press("Control+A")
     page.keyboard.type("-5")
