@@ -318,7 +318,7 @@ def transient_analysis(ops, soil_law, a0, a1, unbalance_N):
     ops.wipeAnalysis()
     ops.constraints("Penalty", PENALTY, PENALTY)
     ops.numberer("RCM")
-    ops.system("ProfileSPD")
+    ops.system("SparseGeneral")
     ops.rayleigh(a0, 0.0, a1, 0.0)
     if soil_law == "elastic":
         ops.algorithm("Linear", "-factorOnce")
