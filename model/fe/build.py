@@ -135,23 +135,30 @@ def _stress_field(scenario: Scenario, soil_law: str):
 
 
 def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, plastic_radius: float):
-    """Soil nodes, materials, quads and the symmetry conditions; returns bookkeeping."""
+    """Soil nodes, materials, quads and the symmetry conditions; returns bookkeeping.
+
+    The soil's mass sits on the nodes: the quad's own lumped mass (ρ N_a |J| at its 2 × 2 Gauss
+    points), so that the quads carry none and OpenSees does not rebuild their mass matrices
+    twice per residual (inertia and Rayleigh a₀M); the same matrix, the same results to
+    rounding, about 10 % less time per iteration (docs/fe_section.md)."""
     soil = scenario.soil
     ops.wipe()
     ops.model("basic", "-ndm", 2, "-ndf", 2)
     nr, nt = mesh.n_rings, mesh.n_theta
+    nodal_mass = body_loads(mesh, lambda y: soil.density)
     for i in range(nr + 1):
         for j in range(nt + 1):
-            ops.node(int(mesh.node_tag(i, j)), *map(float, mesh.xy(i, j)))
+            tag = int(mesh.node_tag(i, j))
+            ops.node(tag, *map(float, mesh.xy(i, j)))
+            ops.mass(tag, float(nodal_mass[i, j]), float(nodal_mass[i, j]))
     for i in range(nr + 1):
         ops.fix(int(mesh.node_tag(i, 0)), 1, 0)
         ops.fix(int(mesh.node_tag(i, nt)), 1, 0)
 
     shear, bulk = soil.shear_modulus, soil.bulk_modulus
-    rho = soil.density
     n_elements = nr * nt
     ele_x, ele_y = mesh.centroids()
-    ops.nDMaterial("ElasticIsotropic", 1, soil.youngs_modulus, soil.poisson_ratio, rho)
+    ops.nDMaterial("ElasticIsotropic", 1, soil.youngs_modulus, soil.poisson_ratio, 0.0)
     plastic = (soil_law == "mohr_coulomb") & (np.hypot(ele_x, ele_y) <= plastic_radius)
     plastic &= ele_y < scenario.tunnel.axis_depth
     strength = undrained_strength(scenario, ele_y)
@@ -166,7 +173,7 @@ def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, pla
             nodes = [
                 mesh.node_tag(a, b) for a, b in [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
             ]
-            ops.element("quad", tag, *map(int, nodes), 1.0, "PlaneStrain", mat, 0.0, rho, 0.0, 0.0)
+            ops.element("quad", tag, *map(int, nodes), 1.0, "PlaneStrain", mat, 0.0, 0.0, 0.0, 0.0)
 
     return {"n_elements": n_elements, "n_plastic": int(plastic.sum())}
 
