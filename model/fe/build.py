@@ -19,7 +19,8 @@
   by the body force ρ g and the tractions of that field on the outer boundary (a linear stress
   field is compatible, so the elastic solution reproduces it exactly away from the tunnel),
   the lining wished in place with its own weight; the tunnel perturbs the field locally.
-- **Soil laws.** ``"elastic"``: ``ElasticIsotropic`` (E, ν, ρ). ``"mohr_coulomb"``: the
+- **Soil laws.** ``"elastic"``: ``ElasticIsotropic`` (E, ν; the mass is on the nodes, see
+  :func:`build_section`). ``"mohr_coulomb"``: the
   undrained (φ_u = 0) Mohr–Coulomb, i.e. Tresca, criterion matched in plane strain by
   Drucker–Prager with zero friction, i.e. von Mises with σ_Y = √3 c_u (OpenSees
   ``J2Plasticity``, perfectly plastic, associated), with the
@@ -140,7 +141,7 @@ def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, pla
     The soil's mass sits on the nodes: the quad's own lumped mass (ρ N_a |J| at its 2 × 2 Gauss
     points), so that the quads carry none and OpenSees does not rebuild their mass matrices
     twice per residual (inertia and Rayleigh a₀M); the same matrix, the same results to
-    rounding, about 10 % less time per iteration (docs/fe_section.md)."""
+    rounding (docs/fe_section.md, Speed)."""
     soil = scenario.soil
     ops.wipe()
     ops.model("basic", "-ndm", 2, "-ndf", 2)
@@ -321,7 +322,9 @@ def transient_analysis(ops, soil_law, a0, a1, unbalance_N):
     tangent of the passage's first step, factorised once (with the mass term 4M/Δt² in it, it
     needs about as many iterations as Krylov–Newton refactorised every step:
     docs/fe_section.md); a step has converged when the unbalanced force is below
-    ``unbalance_N`` or the displacement correction below DISP_TOLERANCE."""
+    ``unbalance_N`` or the displacement correction below DISP_TOLERANCE. The system is solved
+    by SuperLU on the RCM numbering, whose back-substitutions cost less than the profile
+    solver's (docs/fe_section.md, Speed)."""
     ops.wipeAnalysis()
     ops.constraints("Penalty", PENALTY, PENALTY)
     ops.numberer("RCM")
