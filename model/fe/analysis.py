@@ -57,12 +57,13 @@ stays elastic (changes the result by < 1e-6 of it, docs/fe_section.md)."""
 
 FE_CPU_SECONDS_PER_ELEMENT_STEP = {
     "elastic": 51.0 / (8904 * 1851),
-    "mohr_coulomb": 175.0 / (8904 * 1851),
+    "mohr_coulomb": 192.0 / (8904 * 1851),
 }
 """CPU time per soil element and time step (s), from docs/fe_section.md's speed table: one
 passage of the paper case on the default mesh (8904 soil elements, 1851 steps) took 51 s with
-the elastic law and 175 s with Mohr–Coulomb on the 2-core development machine. The plastic law's
-cost grows with the yielding (iterations per step), so the estimate is a guide, not a bound."""
+the elastic law and 192 s (mean of three runs) with Mohr–Coulomb on the 2-core development
+machine. The plastic law's cost grows with the yielding (iterations per step), so the estimate
+is a guide, not a bound."""
 
 Progress = Callable[[str, float], None]
 
