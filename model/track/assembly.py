@@ -118,20 +118,20 @@ class WheelInputs(NamedTuple):
 
 
 class SystemState(NamedTuple):
-    """Displacements, velocities, accelerations and previous accelerations, updated in place.
+    """Displacements, velocities and accelerations, updated in place.
 
     q: rail modal coordinates (N_m,), s: block modal coordinates (N−1,), u: vehicle DOFs
-    (n_cars · d,), all down + (m, or rad for pitch), from the unloaded track.
+    (n_cars · d,), all down + (m, or rad for pitch), from the unloaded track. The track's
+    predictor runs in the pass that evaluates its accelerations, so only the vehicle keeps
+    its previous accelerations (udd_prev).
     """
 
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
-    qdd_prev: np.ndarray
     s: np.ndarray
     sd: np.ndarray
     sdd: np.ndarray
-    sdd_prev: np.ndarray
     u: np.ndarray
     ud: np.ndarray
     udd: np.ndarray
@@ -149,9 +149,8 @@ class Scratch(NamedTuple):
     wheel_prev: np.ndarray  # (n_wheels,) and its two running terms
     wheel_cur: np.ndarray  # (n_wheels,)
     rail_at_wheel: np.ndarray  # (n_wheels,) Z_r(x_j)
-    fold_disp: np.ndarray  # (N−1,) rail displacement folded onto block modes
-    fold_vel: np.ndarray  # (N−1,)
-    block_mode_force: np.ndarray  # (N−1,) fastener force per block mode
+    fold_disp: np.ndarray  # (N−1,) rail modes k ≥ N − 1 folded onto block modes (zeros if none)
+    fold_vel: np.ndarray  # (N−1,) their velocities, likewise
     wheel_x: np.ndarray  # (n_wheels,) wheel positions (m)
     compression: np.ndarray  # (n_wheels,) δ (m)
     wheel_force: np.ndarray  # (n_wheels,) wheel–rail forces (N)
@@ -519,11 +518,9 @@ def static_equilibrium(
         q=q,
         qd=qd,
         qdd=np.zeros_like(q),
-        qdd_prev=np.zeros_like(q),
         s=s,
         sd=sd,
         sdd=np.zeros_like(s),
-        sdd_prev=np.zeros_like(s),
         u=u,
         ud=ud,
         udd=np.zeros_like(u),

@@ -214,18 +214,70 @@ def modal_loads(two_cos, first, prev, cur, load):
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def paired_modes(track, state, modal_load, rail_disp, rail_vel, block_force, sums, step):
-    """Rail mode r and block mode r, r < min(N_m, N − 1) (ρ = r, σ = +1): accelerations,
-    fastener forces, monitored sums, and Zhai's predictor over ``step`` = (Δt, φ, ψ) if Δt > 0.
+def fastener_force(track, rail_disp, rail_vel, block_disp, block_vel):
+    """Fastener force of one block mode, F̂ = K_r (b Q − s) + C_r (b Q̇ − ṡ) (N).
 
-    ``rail_disp``, ``rail_vel``: the rail's displacement and velocity folded onto each block
-    mode (q, q̇ themselves when N_m ≤ N − 1). The accelerations a_n replace a_{n−1} in qdd and
-    sdd, which move to qdd_prev and sdd_prev when the state is advanced.
+    ``rail_disp``, ``rail_vel``: Q, Q̇, the rail's displacement and velocity folded onto the
+    block mode.
     """
-    q, qd, qdd, qdd_prev = state.q, state.qd, state.qdd, state.qdd_prev
-    s, sd, sdd, sdd_prev = state.s, state.sd, state.sdd, state.sdd_prev
+    gain = track.block_gain
+    return track.fastener_k * (gain * rail_disp - block_disp) + track.fastener_c * (
+        gain * rail_vel - block_vel
+    )
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def unpaired_rail_modes(track, state, modal_load, fold_disp, fold_vel, step):
+    """Rail modes k ≥ N − 1 (N_m ≥ N), before :func:`paired_modes` moves the others.
+
+    Folds their displacements and velocities onto the block modes ρ_k they meet, with sign σ_k
+    (``fold_disp``, ``fold_vel``: the sums over these modes only, zero at every block mode none
+    of them meets), then sets their accelerations (with the fastener force of block mode ρ_k)
+    and takes them to t + Δt with Zhai's predictor (``step`` = (Δt, φ, ψ); Δt = 0 leaves them).
+
+    Returns
+    -------
+    float
+        Their part of the rail displacement at the monitored block, Σ_k Y_k(x_b) q_k.
+    """
+    q, qd, qdd = state.q, state.qd, state.qdd
+    s, sd = state.s, state.sd
+    fold_index, fold_sign = track.fold_index, track.fold_sign
+    dt, phi, psi = step
+    n_paired = min(q.size, s.size)
+    for k in range(n_paired, q.size):
+        if fold_index[k] >= 0:
+            fold_disp[fold_index[k]] = 0.0
+            fold_vel[fold_index[k]] = 0.0
+    for k in range(n_paired, q.size):
+        if fold_index[k] >= 0:
+            fold_disp[fold_index[k]] += fold_sign[k] * q[k]
+            fold_vel[fold_index[k]] += fold_sign[k] * qd[k]
+    z_rail = 0.0
+    for k in range(n_paired, q.size):
+        rail_acc = modal_load[k] - track.omega2[k] * q[k]
+        r = fold_index[k]
+        if r >= 0:
+            force = fastener_force(track, q[r] + fold_disp[r], qd[r] + fold_vel[r], s[r], sd[r])
+            rail_acc -= fold_sign[k] * track.block_gain * force
+        z_rail += track.monitored_rail_shapes[k] * q[k]
+        q[k], qd[k] = zhai_update(q[k], qd[k], rail_acc, qdd[k], dt, phi, psi)
+        qdd[k] = rail_acc
+    return z_rail
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def paired_modes(track, state, modal_load, fold_disp, fold_vel, sums, step):
+    """Rail mode r and block mode r, r < min(N_m, N − 1) (ρ = r, σ = +1): accelerations,
+    monitored sums, and Zhai's predictor over ``step`` = (Δt, φ, ψ) (Δt = 0 leaves the state).
+
+    ``fold_disp``, ``fold_vel``: what the rail modes k ≥ N − 1 add to the rail's displacement and
+    velocity on each block mode (:func:`unpaired_rail_modes`). The accelerations a_n replace
+    a_{n−1} in qdd and sdd. The loop has no branch, so it vectorises.
+    """
+    q, qd, qdd = state.q, state.qd, state.qdd
+    s, sd, sdd = state.s, state.sd, state.sdd
     omega2, gain = track.omega2, track.block_gain
-    fastener_k, fastener_c = track.fastener_k, track.fastener_c
     pad_k, pad_c = track.pad_k, track.pad_c
     inv_block_mass = 1.0 / track.block_mass
     block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
@@ -234,20 +286,17 @@ def paired_modes(track, state, modal_load, rail_disp, rail_vel, block_force, sum
     z_block = 0.0
     v_block = 0.0
     for r in range(min(q.size, s.size)):
-        force = fastener_k * (gain * rail_disp[r] - s[r]) + fastener_c * (
-            gain * rail_vel[r] - sd[r]
+        rail_disp, rail_vel, block_disp, block_vel = q[r], qd[r], s[r], sd[r]
+        force = fastener_force(
+            track, rail_disp + fold_disp[r], rail_vel + fold_vel[r], block_disp, block_vel
         )
-        block_force[r] = force
-        rail_acc = modal_load[r] - omega2[r] * q[r] - gain * force
-        block_acc = (force - pad_k * s[r] - pad_c * sd[r]) * inv_block_mass
-        z_rail += rail_weight[r] * q[r]
-        z_block += block_weight[r] * s[r]
-        v_block += block_weight[r] * sd[r]
-        if dt > 0.0:
-            q[r], qd[r] = zhai_update(q[r], qd[r], rail_acc, qdd[r], dt, phi, psi)
-            s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
-            qdd_prev[r] = qdd[r]
-            sdd_prev[r] = sdd[r]
+        rail_acc = modal_load[r] - omega2[r] * rail_disp - gain * force
+        block_acc = (force - pad_k * block_disp - pad_c * block_vel) * inv_block_mass
+        z_rail += rail_weight[r] * rail_disp
+        z_block += block_weight[r] * block_disp
+        v_block += block_weight[r] * block_vel
+        q[r], qd[r] = zhai_update(rail_disp, rail_vel, rail_acc, qdd[r], dt, phi, psi)
+        s[r], sd[r] = zhai_update(block_disp, block_vel, block_acc, sdd[r], dt, phi, psi)
         qdd[r] = rail_acc
         sdd[r] = block_acc
     sums[0] += z_rail
@@ -256,51 +305,38 @@ def paired_modes(track, state, modal_load, rail_disp, rail_vel, block_force, sum
 
 
 @numba.njit(cache=True, fastmath=FAST)
-def unpaired_modes(track, state, modal_load, block_force, sums, step):
-    """The modes :func:`paired_modes` leaves: block modes r ≥ N_m (N_m < N − 1), which no rail
-    mode meets, and rail modes k ≥ N − 1, folded onto block mode ρ_k with sign σ_k."""
-    q, qd, qdd, qdd_prev = state.q, state.qd, state.qdd, state.qdd_prev
-    s, sd, sdd, sdd_prev = state.s, state.sd, state.sdd, state.sdd_prev
-    fold_index, fold_sign = track.fold_index, track.fold_sign
-    block_weight, rail_weight = track.monitored_block_weights, track.monitored_rail_shapes
+def unpaired_block_modes(track, state, sums, step):
+    """Block modes r ≥ N_m (N_m < N − 1), which no rail mode meets: accelerations, monitored
+    sums and Zhai's predictor."""
+    s, sd, sdd = state.s, state.sd, state.sdd
+    block_weight = track.monitored_block_weights
     dt, phi, psi = step
-    n_paired = min(q.size, s.size)
-    for r in range(n_paired, s.size):
+    for r in range(min(state.q.size, s.size), s.size):
         block_acc = (
             -(track.fastener_k + track.pad_k) * s[r] - (track.fastener_c + track.pad_c) * sd[r]
         ) / track.block_mass
         sums[1] += block_weight[r] * s[r]
         sums[2] += block_weight[r] * sd[r]
-        if dt > 0.0:
-            s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
-            sdd_prev[r] = sdd[r]
+        s[r], sd[r] = zhai_update(s[r], sd[r], block_acc, sdd[r], dt, phi, psi)
         sdd[r] = block_acc
-    for k in range(n_paired, q.size):
-        rail_acc = modal_load[k] - track.omega2[k] * q[k]
-        if fold_index[k] >= 0:
-            rail_acc -= fold_sign[k] * track.block_gain * block_force[fold_index[k]]
-        sums[0] += rail_weight[k] * q[k]
-        if dt > 0.0:
-            q[k], qd[k] = zhai_update(q[k], qd[k], rail_acc, qdd[k], dt, phi, psi)
-            qdd_prev[k] = qdd[k]
-        qdd[k] = rail_acc
 
 
 @numba.njit(cache=True, fastmath=FAST)
 def accelerations(t, state, track, vehicle, wheels, scratch, step):
     """Accelerations of the whole system at time t, then the track's predictor step.
 
-    Sets qdd, sdd, udd (the previous ones move to qdd_prev, sdd_prev when the state is
+    Sets qdd, sdd, udd (udd's previous values move to udd_prev when the vehicle is
     advanced), the wheel forces and compressions in ``scratch`` and the monitored rail and
     block displacements and block velocity in ``scratch.monitored``. With ``step`` =
-    (Δt, φ, ψ), Δt > 0, Zhai's predictor then takes the rail and block modal coordinates to
-    t + Δt in the same pass over the modes (the vehicle's is :func:`zhai_predict`).
+    (Δt, φ, ψ), Zhai's predictor then takes the rail and block modal coordinates to t + Δt in
+    the same pass over the modes (Δt = 0 leaves them: the update is then exactly zero; the
+    vehicle's predictor is :func:`zhai_predict`).
 
     ``wheels.prescribed_load`` (n_wheels,) replaces the Hertz law when its first entry is ≥ 0:
     the moving-constant-load model, with the vehicle at rest (ü = 0, δ reported as 0). It is
     [-1.0] for the coupled vehicle.
     """
-    q, qd = state.q, state.qd
+    q = state.q
     u, ud, udd = state.u, state.ud, state.udd
     wheel_x0, speed, prescribed_load = wheels.x0, wheels.speed, wheels.prescribed_load
     rail_at_wheel, modal_load = scratch.rail_at_wheel, scratch.modal_load
@@ -332,12 +368,12 @@ def accelerations(t, state, track, vehicle, wheels, scratch, step):
             udd[i] = 0.0
     else:
         # Wheel–rail contact: δ = Z_w − Z_r(x_w) − η(x_w)
-        for j in range(n_wheels):
-            car = j // wheels_per_car
-            dof = car * n_dof + wheel_dof[car, j % wheels_per_car]
-            eta = profile_at(wheels.eta_grid, wheels.eta_start, wheels.eta_step, wheel_x[j])
-            compression[j] = u[dof] - rail_at_wheel[j] - eta
-            wheel_force[j] = hertz_force(compression[j], wheels.hertz_constant)
+        for car in range(wheel_dof.shape[0]):  # nested loops: no integer division per wheel
+            for w in range(wheels_per_car):
+                j = car * wheels_per_car + w
+                eta = profile_at(wheels.eta_grid, wheels.eta_start, wheels.eta_step, wheel_x[j])
+                compression[j] = u[car * n_dof + wheel_dof[car, w]] - rail_at_wheel[j] - eta
+                wheel_force[j] = hertz_force(compression[j], wheels.hertz_constant)
         vehicle_accelerations(u, ud, udd, vehicle, wheel_force)
 
     # Modal wheel loads Σ_j p_j Y_k(x_j)
@@ -346,25 +382,16 @@ def accelerations(t, state, track, vehicle, wheels, scratch, step):
     modal_loads(two_cos, first, prev, cur, modal_load)
 
     # Track: rail mode k < N meets block mode k alone; modes k ≥ N fold onto the block modes
-    # (none with the default N_m = N), through fold_disp and fold_vel.
+    # (none with the default N_m = N). Every acceleration uses the state at t, so the unpaired
+    # rail modes are folded and advanced first.
     monitored = scratch.monitored
     monitored[:] = 0.0
-    if q.size > state.s.size:
-        fold_disp, fold_vel = scratch.fold_disp, scratch.fold_vel
-        fold_index, fold_sign = track.fold_index, track.fold_sign
-        for r in range(fold_disp.size):
-            fold_disp[r] = q[r]
-            fold_vel[r] = qd[r]
-        for k in range(fold_disp.size, q.size):
-            if fold_index[k] >= 0:
-                fold_disp[fold_index[k]] += fold_sign[k] * q[k]
-                fold_vel[fold_index[k]] += fold_sign[k] * qd[k]
-        paired_modes(
-            track, state, modal_load, fold_disp, fold_vel, scratch.block_mode_force, monitored, step
-        )
-    else:
-        paired_modes(track, state, modal_load, q, qd, scratch.block_mode_force, monitored, step)
-    unpaired_modes(track, state, modal_load, scratch.block_mode_force, monitored, step)
+    z_unpaired = unpaired_rail_modes(
+        track, state, modal_load, scratch.fold_disp, scratch.fold_vel, step
+    )
+    paired_modes(track, state, modal_load, scratch.fold_disp, scratch.fold_vel, monitored, step)
+    monitored[0] += z_unpaired
+    unpaired_block_modes(track, state, monitored, step)
 
 
 @numba.njit(cache=True, nogil=True)  # releases the GIL: a served dashboard stays responsive
@@ -454,10 +481,11 @@ def record(out, state, track, vehicle, scratch, outputs):
     wheel_dof = vehicle.wheel_dof
     wheels_per_car = wheel_dof.shape[1]
     wheel_force = scratch.wheel_force
-    for j in range(wheel_force.size):
-        car = j // wheels_per_car
-        outputs.wheel_force[j, out] = wheel_force[j]
-        outputs.wheel_acc[j, out] = udd[car * n_dof + wheel_dof[car, j % wheels_per_car]]
+    for car in range(wheel_dof.shape[0]):
+        for w in range(wheels_per_car):
+            j = car * wheels_per_car + w
+            outputs.wheel_force[j, out] = wheel_force[j]
+            outputs.wheel_acc[j, out] = udd[car * n_dof + wheel_dof[car, w]]
     body_acc = outputs.body_acc
     for car in range(body_acc.shape[0]):
         body_acc[car, out] = udd[car * n_dof + vehicle.body_dof]
