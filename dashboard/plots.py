@@ -17,9 +17,10 @@ import holoviews as hv
 import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used below)
 import numpy as np
 
+from dashboard.parsed import scenario_of, summary_of
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.fe.store import FEResult
-from model.params import DATA_DIR, Scenario, Soil
+from model.params import DATA_DIR, Soil
 from model.pipeline import Results
 
 REFERENCE_FILE = DATA_DIR / "paper_reference.json"
@@ -102,24 +103,6 @@ REFERENCE_COLOUR = "#555555"
 REFERENCE_LINE_COLOUR = "#888888"  # dashed, lighter: it often runs over the black current run
 OTHER_MODEL_COLOUR = REFERENCE_LINE_COLOUR  # the other tunnel–soil model: faint, behind
 FE_COLOUR = "#8c564b"  # a stored FE result of the same scenario
-
-
-_SCENARIOS: dict[int, Scenario] = {}
-"""Parsed scenarios by id of their Results, each dropped with its Results."""
-
-
-def scenario_of(results: Results) -> Scenario:
-    """The scenario of ``results``, to read only: parsed once per Results and shared.
-
-    ``results.scenario`` parses the JSON anew on each call (6 ms on the paper case), and the
-    page read it seven times to show one run.
-    """
-    key = id(results)
-    scenario = _SCENARIOS.get(key)
-    if scenario is None:
-        scenario = _SCENARIOS[key] = results.scenario
-        weakref.finalize(results, _SCENARIOS.pop, key, None)
-    return scenario
 
 
 @dataclass(frozen=True)
@@ -492,7 +475,7 @@ def significant(value: float, digits: int = 3) -> str:
 
 def summary_items(results: Results) -> list[SummaryItem]:
     """Key numbers of a run in display units, from :meth:`Results.summary`."""
-    s = results.summary()
+    s = summary_of(results)
     deepest = s["deepest_depth_m"]
     return [
         SummaryItem(
