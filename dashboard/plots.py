@@ -69,14 +69,35 @@ def legend_options(labels: Sequence[str]) -> dict:
     """Legend below the axes (never over the data), in as many columns (at most 3) as fit
     the narrowest plot (about 7 px per character and 40 px per entry's line and gap), the
     columns :data:`LEGEND_SPACING_PX` apart (Bokeh's default 3 px ran one entry's label into
-    the next one's line)."""
+    the next one's line).
+
+    HoloViews would take a legend placed outside the axes (``legend_position="bottom"``) out
+    of the figure and put it back on every update of the plot, and each time the browser laid
+    the figure out again; the legend is made inside and moved below the axes once, by
+    :func:`_legend_below`.
+    """
     longest = max((len(label) for label in labels), default=1)
     columns = int(PLOT_MIN_WIDTH // (7 * longest + 40 + LEGEND_SPACING_PX))
     return {
-        "legend_position": "bottom",
+        "legend_position": LEGEND_PLACE_HOLDER,
         "legend_cols": max(1, min(3, columns)),
         "legend_opts": {"spacing": LEGEND_SPACING_PX},
+        "hooks": [_legend_below],
     }
+
+
+LEGEND_PLACE_HOLDER = "top_left"
+"""Where HoloViews makes a legend (inside the axes) before :func:`_legend_below` moves it."""
+
+
+def _legend_below(plot, element) -> None:
+    """HoloViews hook: move the figure's legends below the axes, where they stay (a plot
+    updated in place keeps them there: the hook then changes nothing)."""
+    figure = plot.state
+    for legend in figure.legend:
+        if legend not in figure.below:
+            figure.center.remove(legend)
+            figure.add_layout(legend, "below")
 
 
 def legend_labels(names: Sequence[str]) -> list[str]:
@@ -253,13 +274,27 @@ def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Elemen
     """The current run's layer alone, or with pinned runs an Overlay with its legend outside."""
     if not overlays:
         return layers[0].opts(**opts, **PLOT_OPTIONS)
-    return hv.Overlay(layers).opts(**opts, **_legend_of(layers, overlays), **PLOT_OPTIONS)
+    return hv.Overlay(layers).opts(**opts, **_with_legend(layers, overlays))
 
 
-def _legend_of(layers: list[hv.Element], overlays: Overlays) -> dict:
-    """:func:`legend_options` for the labels of ``layers`` and of the pinned runs."""
+LEGEND_ROW_PX = 36
+"""Height of a row of legend entries (a 20 px entry and the spacing)."""
+LEGEND_FREE_ROWS = 2
+"""Rows of legend entries a plot of :data:`PLOT_HEIGHT` holds; each further row makes the plot
+taller by :data:`LEGEND_ROW_PX` (the legend is part of the figure: without that, 8 pinned runs
+squeezed the axes of a plot to a strip and cut off the legend's last entries)."""
+
+
+def _with_legend(layers: list[hv.Element], overlays: Overlays, also: Sequence[str] = ()) -> dict:
+    """:data:`PLOT_OPTIONS` and :func:`legend_options` for the labels of ``layers``, of the
+    pinned runs and ``also`` (entries that an update in place may add), the plot as much taller
+    as its legend needs."""
     labels = [layer.label for layer in layers if not isinstance(layer, hv.Contours)]
-    return legend_options([*labels, *legend_labels([name for name, _, _ in overlays])])
+    labels = [*labels, *legend_labels([name for name, _, _ in overlays]), *also]
+    legend = legend_options(labels)
+    rows = -(-len(labels) // legend["legend_cols"])
+    height = PLOT_HEIGHT + LEGEND_ROW_PX * max(0, rows - LEGEND_FREE_ROWS)
+    return {**PLOT_OPTIONS, **legend, "height": height, "min_height": height}
 
 
 BLOCK_DISP = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
@@ -283,8 +318,7 @@ def block_displacement_plot(results: Results | None, *, overlays: Overlays = ())
         layers.append(winkler.opts(color=REFERENCE_LINE_COLOUR, line_dash="dashed", line_width=2))
     return hv.Overlay(layers).opts(
         title="Sleeper (block) displacement",
-        **_legend_of(layers, overlays),
-        **PLOT_OPTIONS,
+        **_with_legend(layers, overlays),
     )
 
 
@@ -429,12 +463,15 @@ def depth_profile_plot(
         layers.append(
             points.opts(color=REFERENCE_COLOUR, marker=marker, size=9, alpha=0.8, **_FOLLOW_DATA)
         )
+    # the other model's curve comes after the results, in place: its legend entry has room
+    arriving = []
+    if other_model is None and results is not None:
+        arriving = [MODEL_NAMES[OTHER_MODEL[scenario_of(results).tunnel.model]]]
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        **_legend_of(layers, overlays),
+        **_with_legend(layers, overlays, also=arriving),
         padding=0.05,
-        **PLOT_OPTIONS,
     )
 
 
