@@ -211,16 +211,39 @@ def run_layers(
 
 PINNED_RUN = hv.Dimension("run", label="Pinned run")
 
-_PINNED_LAYERS: dict[tuple, hv.Contours] = {}
+
+class PinnedRuns(hv.Contours):
+    """The pinned runs of a plot (:func:`pinned_runs_layer`): Contours whose ranges are
+    computed once.
+
+    The element is built once per set of pinned runs and its data never change, but HoloViews
+    ranges every element of a plot on each update, and over a Contours it does so path by
+    path through a dataset made per call: with 8 pinned runs, most of what pinning added to
+    the server's update of the five plots. The ranges stay those of the data (not a fixed
+    ``Dimension.range``, which would override the current run's).
+    """
+
+    def range(self, dim, data_range=True, dimension_range=True):
+        """:meth:`hv.Contours.range`, computed once per dimension and arguments."""
+        key = (self.get_dimension(dim, strict=True).name, data_range, dimension_range)
+        ranges = self.__dict__.setdefault("_ranges", {})
+        if key not in ranges:
+            ranges[key] = super().range(dim, data_range, dimension_range)
+        return ranges[key]
+
+
+hv.Store.register({PinnedRuns: hv.Store.registry["bokeh"][hv.Contours]}, "bokeh")
+
+_PINNED_LAYERS: dict[tuple, PinnedRuns] = {}
 """Pinned layers by (layer, (id(results), name, colour) of each run), each dropped as soon as
 one of its Results is."""
 
 
-def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overlays) -> hv.Contours:
+def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overlays) -> PinnedRuns:
     """Every pinned run's curve in one element, one line per run in its colour and legend entry.
 
-    One Contours element (one Bokeh renderer), not a Curve per run: on every change of the
-    current run the browser repaints each renderer of the plot and restyles it (Bokeh reads
+    One :class:`PinnedRuns` element (one Bokeh renderer), not a Curve per run: on every change
+    of the current run the browser repaints each renderer of the plot and restyles it (Bokeh reads
     its CSS on each paint); with 8 pinned runs as 8 curves that cost about 0.5 s per change
     (benchmarks/bench_whatif.py). The element is built once per set of pinned runs (a pinned
     run never changes): the very same element lets a plot updated in place skip re-sending
@@ -246,7 +269,7 @@ def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overl
         {x_dim.name: c.dimension_values(0), y_dim.name: c.dimension_values(1), "run": label}
         for c, label in zip(curves, labels, strict=True)
     ]
-    element = hv.Contours(paths, kdims=[x_dim, y_dim], vdims=[PINNED_RUN]).opts(
+    element = PinnedRuns(paths, kdims=[x_dim, y_dim], vdims=[PINNED_RUN]).opts(
         color="run",
         cmap={label: colour for label, (_, _, colour) in zip(labels, overlays, strict=True)},
         line_width=PINNED_LINE_WIDTH,
@@ -289,7 +312,7 @@ def _with_legend(layers: list[hv.Element], overlays: Overlays, also: Sequence[st
     """:data:`PLOT_OPTIONS` and :func:`legend_options` for the labels of ``layers``, of the
     pinned runs and ``also`` (entries that an update in place may add), the plot as much taller
     as its legend needs."""
-    labels = [layer.label for layer in layers if not isinstance(layer, hv.Contours)]
+    labels = [layer.label for layer in layers if not isinstance(layer, PinnedRuns)]
     labels = [*labels, *legend_labels([name for name, _, _ in overlays]), *also]
     legend = legend_options(labels)
     rows = -(-len(labels) // legend["legend_cols"])
@@ -437,8 +460,10 @@ def depth_profile_plot(
     layers = run_layers(_depth_curve, results, current_label, overlays)
     if other_model is not None:
         name = MODEL_NAMES[scenario_of(other_model).tunnel.model]
+        # over the pinned runs, under the current run (the dashboard draws the pinned runs as
+        # a layer of their own under the rest)
         layers.insert(
-            0,
+            1 if overlays else 0,
             _depth_curve(other_model, name).opts(
                 color=OTHER_MODEL_COLOUR, line_dash="dashed", line_width=1.5, alpha=0.6
             ),
