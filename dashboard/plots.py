@@ -213,23 +213,35 @@ PINNED_RUN = hv.Dimension("run", label="Pinned run")
 
 
 class PinnedRuns(hv.Contours):
-    """The pinned runs of a plot (:func:`pinned_runs_layer`): Contours whose ranges are
-    computed once.
+    """The pinned runs of a plot (:func:`pinned_runs_layer`): Contours whose ranges and
+    values are computed once.
 
     The element is built once per set of pinned runs and its data never change, but HoloViews
-    ranges every element of a plot on each update, and over a Contours it does so path by
-    path through a dataset made per call: with 8 pinned runs, most of what pinning added to
-    the server's update of the five plots. The ranges stay those of the data (not a fixed
-    ``Dimension.range``, which would override the current run's).
+    ranges every element of a plot on each update and maps the colours of every vertex's run
+    name again, and over a Contours it does so path by path through a dataset made per call:
+    with 8 pinned runs, most of what pinning added to the server's update of the five plots.
+    The ranges stay those of the data (not a fixed ``Dimension.range``, which would override
+    the current run's).
     """
 
     def range(self, dim, data_range=True, dimension_range=True):
         """:meth:`hv.Contours.range`, computed once per dimension and arguments."""
         key = (self.get_dimension(dim, strict=True).name, data_range, dimension_range)
-        ranges = self.__dict__.setdefault("_ranges", {})
-        if key not in ranges:
-            ranges[key] = super().range(dim, data_range, dimension_range)
-        return ranges[key]
+        return self._once("range", key, lambda: super(PinnedRuns, self).range(*key))
+
+    def dimension_values(self, dimension, expanded=True, flat=True):
+        """:meth:`hv.Contours.dimension_values`, computed once per dimension and arguments
+        (a copy each time: the caller may change it)."""
+        key = (self.get_dimension(dimension, strict=True).name, expanded, flat)
+        values = self._once("values", key, lambda: super(PinnedRuns, self).dimension_values(*key))
+        return values.copy()
+
+    def _once(self, what: str, key: tuple, compute: Callable[[], object]):
+        """``compute()``, kept under (``what``, ``key``) for the life of the element."""
+        kept = self.__dict__.setdefault("_kept", {})
+        if (what, key) not in kept:
+            kept[what, key] = compute()
+        return kept[what, key]
 
 
 hv.Store.register({PinnedRuns: hv.Store.registry["bokeh"][hv.Contours]}, "bokeh")
