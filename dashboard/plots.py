@@ -27,7 +27,11 @@ REFERENCE_FILE = DATA_DIR / "paper_reference.json"
 
 # A displayed time history keeps at most this many points: a 6-car passage at Δt = 1e-4 s has
 # ~70 000 samples, far more than a plot's pixels; min/max decimation keeps every peak visible.
-MAX_DISPLAY_POINTS = 4000
+# 2000 points are a minimum and a maximum in each of ~1000 bins: at most one bin per pixel
+# column on a plot up to 1000 px wide, and the time histories (the first two of five plots,
+# 440 px basis each) are wider only in a main area over 5000 px; the browser maps and strokes
+# half the points of 4000 on each change.
+MAX_DISPLAY_POINTS = 2000
 # A pinned run's time history is drawn thinner: with 8 pinned runs a plot holds 9 curves.
 PINNED_DISPLAY_POINTS = 1000
 
