@@ -8,13 +8,13 @@ samples per history):
 * plot building: every function of ``dashboard.plots.PLOTS`` drawing the current run alone and
   with 8 pinned runs overlaid, as HoloViews elements, and rendered to Bokeh models (what the
   server builds when a plot is replaced, e.g. after pinning); best of ``--repeat``;
-* in-place update: what the served dashboard does on a slider change, every plot's
-  DynamicMap sent new Results through its Pipe stream (the current run alternates between two
+* in-place update: what the served dashboard does on a slider change, every plot of its
+  ``PlotPanes`` sent new Results through its stream (the current run alternates between two
   runs that differ in the soil), HoloViews updating the Bokeh models; best of ``--repeat``.
 
 The 8 pinned runs are the same Results object pinned under 8 names: drawing cost depends on
 the array sizes, not the values. A pinned run's layers are built once and reused (see
-``plots._pinned_layer``), so the figures are for a redraw after the first.
+``plots.pinned_runs_layer``), so the figures are for a redraw after the first.
 
 Browser part (``--browser``): in headless Debian Chromium, the time from entering a new soil
 Young's modulus (paper preset) or speed (single bogie) until the plots show the new data, first
@@ -43,9 +43,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 import holoviews as hv  # noqa: E402
-from holoviews.streams import Pipe  # noqa: E402
 
 from dashboard import plots  # noqa: E402
+from dashboard.plot_panes import PlotPanes  # noqa: E402
 from dashboard.whatif import MAX_PINNED, WhatIfSession  # noqa: E402
 from model.params import Scenario  # noqa: E402
 from model.pipeline import run  # noqa: E402
@@ -89,21 +89,18 @@ def panel_free(repeat: int) -> None:
     other = run(softer, cache=None)
 
     def update(pinned):
-        """A callable that sends the next current run to every plot, as a slider change does."""
-        streams, figures = [], []  # the plots are kept alive: they subscribe to the streams
-        for spec in plots.PLOTS:
-            stream = Pipe(data=results)
-            dmap = hv.DynamicMap(
-                lambda data, draw=spec.draw: draw(data, overlays=pinned), streams=[stream]
-            )
-            figures.append(hv.renderer("bokeh").get_plot(dmap))
-            streams.append(stream)
+        """A callable that sends the next current run to every plot, as a slider change does
+        (the dashboard's own plot panes, each plot a DynamicMap on a stream)."""
+        panes = PlotPanes(plots.PLOTS, lambda spec: {"overlays": pinned})
+        panes.show(results, {spec.stage for spec in plots.PLOTS})
+        # the plots are kept alive: they subscribe to the streams
+        figures = [hv.renderer("bokeh").get_plot(pane.object) for pane in panes.panes.values()]
         currents = itertools.cycle((other, results))
 
         def send():
             data = next(currents)
-            for stream in streams:
-                stream.send(data)
+            for spec in plots.PLOTS:
+                panes.send(spec.key, data)
 
         send.figures = figures
         return send

@@ -197,9 +197,10 @@ class Dashboard(pn.viewable.Viewer):
         release_links(pn.Column(*self.main()))  # the sidebar's inputs register none
 
     def _after_change(self) -> None:
-        """An input changed: the soil quantities follow at once, and a run is requested."""
-        self.passage.update_soil_summary(self.scenario.soil)
+        """An input changed: a run is requested (it starts computing at once), and the soil
+        quantities follow."""
         self.refresh()
+        self.passage.update_soil_summary(self.scenario.soil)
 
     def _on_results(self, event: param.parameterized.Event) -> None:
         """The report can be downloaded once there are results."""

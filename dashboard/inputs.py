@@ -206,9 +206,9 @@ class InputsPanel:
         self._after_change()
 
     def _after_change(self) -> None:
-        """The selectors follow the inputs; the change is passed on."""
-        self.show_matching()
+        """The change is passed on (its run starts first); the selectors follow the inputs."""
         self._on_change()
+        self.show_matching()
 
     def _on_refusal(self, path: str, message: str | None) -> None:
         """A control refused an edit (its message is beside it) or took one (None): the

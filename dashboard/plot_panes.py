@@ -61,6 +61,26 @@ def _drawing(spec: plots.PlotSpec, draw_arguments: DrawArguments):
     return callback
 
 
+def _pinned_apart(figure: hv.DynamicMap) -> hv.DynamicMap:
+    """``figure`` with its pinned runs' layer, if any, as a static element under the rest.
+
+    HoloViews updates only the subplots of the stream that fired, so a change of the current
+    run leaves the pinned layer's subplot alone (its colour mapping and glyph were processed
+    again on every change). Each combined frame takes the figure's options (title, legend,
+    height) through its id, and its ranges cover both parts. The pinned runs are fixed for
+    the life of a plot: a change of them makes a new plot.
+    """
+    frame = figure[()]
+    layers = frame.values() if isinstance(frame, hv.Overlay) else [frame]
+    pinned = [layer for layer in layers if isinstance(layer, plots.PinnedRuns)]
+    if not pinned:
+        return figure
+    rest = figure.apply(
+        lambda drawn: hv.Overlay([x for x in drawn if not isinstance(x, plots.PinnedRuns)])
+    )
+    return (pinned[0] * rest).apply(lambda combined: combined.clone(id=figure.last.id))
+
+
 class PlotPanes:
     """The plots of one view, each in a pane that a run updates in place.
 
@@ -172,8 +192,8 @@ class PlotPanes:
     def _new_plot(self, spec: plots.PlotSpec, results: Results) -> None:
         """A new plot of ``results``; its stream then updates it in place."""
         stream = self.streams[spec.key] = Pipe(data=results)
-        self.panes[spec.key].object = hv.DynamicMap(
-            _drawing(spec, self._draw_arguments), streams=[stream]
+        self.panes[spec.key].object = _pinned_apart(
+            hv.DynamicMap(_drawing(spec, self._draw_arguments), streams=[stream])
         )
 
     def _set_stale(self, key: str, stale: bool) -> None:

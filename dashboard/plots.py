@@ -17,16 +17,21 @@ import holoviews as hv
 import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used below)
 import numpy as np
 
+from dashboard.parsed import scenario_of, summary_of
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.fe.store import FEResult
-from model.params import DATA_DIR, Scenario, Soil
+from model.params import DATA_DIR, Soil
 from model.pipeline import Results
 
 REFERENCE_FILE = DATA_DIR / "paper_reference.json"
 
 # A displayed time history keeps at most this many points: a 6-car passage at Δt = 1e-4 s has
 # ~70 000 samples, far more than a plot's pixels; min/max decimation keeps every peak visible.
-MAX_DISPLAY_POINTS = 4000
+# 2000 points are a minimum and a maximum in each of ~1000 bins: at most one bin per pixel
+# column on a plot up to 1000 px wide, and the time histories (the first two of five plots,
+# 440 px basis each) are wider only in a main area over 5000 px; the browser maps and strokes
+# half the points of 4000 on each change.
+MAX_DISPLAY_POINTS = 2000
 # A pinned run's time history is drawn thinner: with 8 pinned runs a plot holds 9 curves.
 PINNED_DISPLAY_POINTS = 1000
 
@@ -68,14 +73,35 @@ def legend_options(labels: Sequence[str]) -> dict:
     """Legend below the axes (never over the data), in as many columns (at most 3) as fit
     the narrowest plot (about 7 px per character and 40 px per entry's line and gap), the
     columns :data:`LEGEND_SPACING_PX` apart (Bokeh's default 3 px ran one entry's label into
-    the next one's line)."""
+    the next one's line).
+
+    HoloViews would take a legend placed outside the axes (``legend_position="bottom"``) out
+    of the figure and put it back on every update of the plot, and each time the browser laid
+    the figure out again; the legend is made inside and moved below the axes once, by
+    :func:`_legend_below`.
+    """
     longest = max((len(label) for label in labels), default=1)
     columns = int(PLOT_MIN_WIDTH // (7 * longest + 40 + LEGEND_SPACING_PX))
     return {
-        "legend_position": "bottom",
+        "legend_position": LEGEND_PLACE_HOLDER,
         "legend_cols": max(1, min(3, columns)),
         "legend_opts": {"spacing": LEGEND_SPACING_PX},
+        "hooks": [_legend_below],
     }
+
+
+LEGEND_PLACE_HOLDER = "top_left"
+"""Where HoloViews makes a legend (inside the axes) before :func:`_legend_below` moves it."""
+
+
+def _legend_below(plot, element) -> None:
+    """HoloViews hook: move the figure's legends below the axes, where they stay (a plot
+    updated in place keeps them there: the hook then changes nothing)."""
+    figure = plot.state
+    for legend in figure.legend:
+        if legend not in figure.below:
+            figure.center.remove(legend)
+            figure.add_layout(legend, "below")
 
 
 def legend_labels(names: Sequence[str]) -> list[str]:
@@ -102,24 +128,6 @@ REFERENCE_COLOUR = "#555555"
 REFERENCE_LINE_COLOUR = "#888888"  # dashed, lighter: it often runs over the black current run
 OTHER_MODEL_COLOUR = REFERENCE_LINE_COLOUR  # the other tunnel–soil model: faint, behind
 FE_COLOUR = "#8c564b"  # a stored FE result of the same scenario
-
-
-_SCENARIOS: dict[int, Scenario] = {}
-"""Parsed scenarios by id of their Results, each dropped with its Results."""
-
-
-def scenario_of(results: Results) -> Scenario:
-    """The scenario of ``results``, to read only: parsed once per Results and shared.
-
-    ``results.scenario`` parses the JSON anew on each call (6 ms on the paper case), and the
-    page read it seven times to show one run.
-    """
-    key = id(results)
-    scenario = _SCENARIOS.get(key)
-    if scenario is None:
-        scenario = _SCENARIOS[key] = results.scenario
-        weakref.finalize(results, _SCENARIOS.pop, key, None)
-    return scenario
 
 
 @dataclass(frozen=True)
@@ -207,16 +215,51 @@ def run_layers(
 
 PINNED_RUN = hv.Dimension("run", label="Pinned run")
 
-_PINNED_LAYERS: dict[tuple, hv.Contours] = {}
+
+class PinnedRuns(hv.Contours):
+    """The pinned runs of a plot (:func:`pinned_runs_layer`): Contours whose ranges and
+    values are computed once.
+
+    The element is built once per set of pinned runs and its data never change, but HoloViews
+    ranges every element of a plot on each update and maps the colours of every vertex's run
+    name again, and over a Contours it does so path by path through a dataset made per call:
+    with 8 pinned runs, most of what pinning added to the server's update of the five plots.
+    The ranges stay those of the data (not a fixed ``Dimension.range``, which would override
+    the current run's).
+    """
+
+    def range(self, dim, data_range=True, dimension_range=True):
+        """:meth:`hv.Contours.range`, computed once per dimension and arguments."""
+        key = (self.get_dimension(dim, strict=True).name, data_range, dimension_range)
+        return self._once("range", key, lambda: super(PinnedRuns, self).range(*key))
+
+    def dimension_values(self, dimension, expanded=True, flat=True):
+        """:meth:`hv.Contours.dimension_values`, computed once per dimension and arguments
+        (a copy each time: the caller may change it)."""
+        key = (self.get_dimension(dimension, strict=True).name, expanded, flat)
+        values = self._once("values", key, lambda: super(PinnedRuns, self).dimension_values(*key))
+        return values.copy()
+
+    def _once(self, what: str, key: tuple, compute: Callable[[], object]):
+        """``compute()``, kept under (``what``, ``key``) for the life of the element."""
+        kept = self.__dict__.setdefault("_kept", {})
+        if (what, key) not in kept:
+            kept[what, key] = compute()
+        return kept[what, key]
+
+
+hv.Store.register({PinnedRuns: hv.Store.registry["bokeh"][hv.Contours]}, "bokeh")
+
+_PINNED_LAYERS: dict[tuple, PinnedRuns] = {}
 """Pinned layers by (layer, (id(results), name, colour) of each run), each dropped as soon as
 one of its Results is."""
 
 
-def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overlays) -> hv.Contours:
+def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overlays) -> PinnedRuns:
     """Every pinned run's curve in one element, one line per run in its colour and legend entry.
 
-    One Contours element (one Bokeh renderer), not a Curve per run: on every change of the
-    current run the browser repaints each renderer of the plot and restyles it (Bokeh reads
+    One :class:`PinnedRuns` element (one Bokeh renderer), not a Curve per run: on every change
+    of the current run the browser repaints each renderer of the plot and restyles it (Bokeh reads
     its CSS on each paint); with 8 pinned runs as 8 curves that cost about 0.5 s per change
     (benchmarks/bench_whatif.py). The element is built once per set of pinned runs (a pinned
     run never changes): the very same element lets a plot updated in place skip re-sending
@@ -242,7 +285,7 @@ def pinned_runs_layer(layer: Callable[[Results, str], hv.Curve], overlays: Overl
         {x_dim.name: c.dimension_values(0), y_dim.name: c.dimension_values(1), "run": label}
         for c, label in zip(curves, labels, strict=True)
     ]
-    element = hv.Contours(paths, kdims=[x_dim, y_dim], vdims=[PINNED_RUN]).opts(
+    element = PinnedRuns(paths, kdims=[x_dim, y_dim], vdims=[PINNED_RUN]).opts(
         color="run",
         cmap={label: colour for label, (_, _, colour) in zip(labels, overlays, strict=True)},
         line_width=PINNED_LINE_WIDTH,
@@ -270,13 +313,27 @@ def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Elemen
     """The current run's layer alone, or with pinned runs an Overlay with its legend outside."""
     if not overlays:
         return layers[0].opts(**opts, **PLOT_OPTIONS)
-    return hv.Overlay(layers).opts(**opts, **_legend_of(layers, overlays), **PLOT_OPTIONS)
+    return hv.Overlay(layers).opts(**opts, **_with_legend(layers, overlays))
 
 
-def _legend_of(layers: list[hv.Element], overlays: Overlays) -> dict:
-    """:func:`legend_options` for the labels of ``layers`` and of the pinned runs."""
-    labels = [layer.label for layer in layers if not isinstance(layer, hv.Contours)]
-    return legend_options([*labels, *legend_labels([name for name, _, _ in overlays])])
+LEGEND_ROW_PX = 36
+"""Height of a row of legend entries (a 20 px entry and the spacing)."""
+LEGEND_FREE_ROWS = 2
+"""Rows of legend entries a plot of :data:`PLOT_HEIGHT` holds; each further row makes the plot
+taller by :data:`LEGEND_ROW_PX` (the legend is part of the figure: without that, 8 pinned runs
+squeezed the axes of a plot to a strip and cut off the legend's last entries)."""
+
+
+def _with_legend(layers: list[hv.Element], overlays: Overlays, also: Sequence[str] = ()) -> dict:
+    """:data:`PLOT_OPTIONS` and :func:`legend_options` for the labels of ``layers``, of the
+    pinned runs and ``also`` (entries that an update in place may add), the plot as much taller
+    as its legend needs."""
+    labels = [layer.label for layer in layers if not isinstance(layer, PinnedRuns)]
+    labels = [*labels, *legend_labels([name for name, _, _ in overlays]), *also]
+    legend = legend_options(labels)
+    rows = -(-len(labels) // legend["legend_cols"])
+    height = PLOT_HEIGHT + LEGEND_ROW_PX * max(0, rows - LEGEND_FREE_ROWS)
+    return {**PLOT_OPTIONS, **legend, "height": height, "min_height": height}
 
 
 BLOCK_DISP = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
@@ -300,8 +357,7 @@ def block_displacement_plot(results: Results | None, *, overlays: Overlays = ())
         layers.append(winkler.opts(color=REFERENCE_LINE_COLOUR, line_dash="dashed", line_width=2))
     return hv.Overlay(layers).opts(
         title="Sleeper (block) displacement",
-        **_legend_of(layers, overlays),
-        **PLOT_OPTIONS,
+        **_with_legend(layers, overlays),
     )
 
 
@@ -420,8 +476,10 @@ def depth_profile_plot(
     layers = run_layers(_depth_curve, results, current_label, overlays)
     if other_model is not None:
         name = MODEL_NAMES[scenario_of(other_model).tunnel.model]
+        # over the pinned runs, under the current run (the dashboard draws the pinned runs as
+        # a layer of their own under the rest)
         layers.insert(
-            0,
+            1 if overlays else 0,
             _depth_curve(other_model, name).opts(
                 color=OTHER_MODEL_COLOUR, line_dash="dashed", line_width=1.5, alpha=0.6
             ),
@@ -446,12 +504,15 @@ def depth_profile_plot(
         layers.append(
             points.opts(color=REFERENCE_COLOUR, marker=marker, size=9, alpha=0.8, **_FOLLOW_DATA)
         )
+    # the other model's curve comes after the results, in place: its legend entry has room
+    arriving = []
+    if other_model is None and results is not None:
+        arriving = [MODEL_NAMES[OTHER_MODEL[scenario_of(results).tunnel.model]]]
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
-        **_legend_of(layers, overlays),
+        **_with_legend(layers, overlays, also=arriving),
         padding=0.05,
-        **PLOT_OPTIONS,
     )
 
 
@@ -492,7 +553,7 @@ def significant(value: float, digits: int = 3) -> str:
 
 def summary_items(results: Results) -> list[SummaryItem]:
     """Key numbers of a run in display units, from :meth:`Results.summary`."""
-    s = results.summary()
+    s = summary_of(results)
     deepest = s["deepest_depth_m"]
     return [
         SummaryItem(

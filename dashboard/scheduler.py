@@ -90,6 +90,8 @@ class LatestRun(Generic[Job, Outcome]):
         self._lock = threading.Lock()
         self._waiting: Job | None = None
         self._has_waiting = False
+        self._computing: tuple[Job, Future] | None = None
+        """The job submitted by :meth:`request`, not yet taken by :meth:`drain`."""
         self._busy = False
         self._cancelled = False
 
@@ -101,16 +103,19 @@ class LatestRun(Generic[Job, Outcome]):
     def request(self, job: Job) -> bool:
         """Ask for ``job`` to run, replacing any job still waiting.
 
-        Returns True when nothing was running: the caller must then await :meth:`drain`;
-        False also after :meth:`cancel`, when the job is dropped.
+        Returns True when nothing was running: ``job`` then starts computing at once (before
+        the caller's further work and the page's messages, which would otherwise delay it),
+        and the caller must await :meth:`drain` for its outcome; False also after
+        :meth:`cancel`, when the job is dropped.
         """
         with self._lock:
             if self._cancelled:
                 return False
-            self._waiting, self._has_waiting = job, True
             if self._busy:
+                self._waiting, self._has_waiting = job, True
                 return False
             self._busy = True
+            self._computing = (job, self._submit(job))
             return True
 
     @property
@@ -138,14 +143,22 @@ class LatestRun(Generic[Job, Outcome]):
             self._cancelled = True
             self._waiting, self._has_waiting = None, False
 
-    def _next(self) -> tuple[bool, Job | None]:
-        """Take the waiting job, or mark the queue idle when there is none."""
+    def _submit(self, job: Job) -> Future:
+        """Start computing ``job`` in the executor."""
+        return self._executor.submit(outcome_of, self._compute, job)
+
+    def _next(self) -> tuple[Job, Future] | None:
+        """The job computing since its request, else the waiting job (started now), else None
+        (the queue is marked idle)."""
         with self._lock:
+            computing, self._computing = self._computing, None
+            if computing is not None:
+                return computing
             if not self._has_waiting:
                 self._busy = False
-                return False, None
+                return None
             job, self._waiting, self._has_waiting = self._waiting, None, False
-            return True, job
+        return job, self._submit(job)
 
     async def drain(
         self,
@@ -154,19 +167,19 @@ class LatestRun(Generic[Job, Outcome]):
         tick: Callable[[], None] | None = None,
         poll_s: float = 0.1,
     ) -> None:
-        """Compute jobs until none waits: ``started(job)``, then ``finished(job, outcome)``.
+        """Compute jobs until none waits: ``started(job)`` (the job may be computing already,
+        since its request), then ``finished(job, outcome)``.
 
         ``tick()`` is called every ``poll_s`` seconds while a job computes (progress display),
         not once it has finished.
         The callbacks run in the awaiting event loop, never in a worker thread.
         """
         try:
-            while True:
-                has_job, job = self._next()
-                if not has_job:
-                    return
-                started(job)
-                future = asyncio.wrap_future(self._executor.submit(outcome_of, self._compute, job))
+            while (computing := self._next()) is not None:
+                job, submitted = computing
+                if not self._cancelled:
+                    started(job)
+                future = asyncio.wrap_future(submitted)
                 while not future.done():
                     await asyncio.wait([future], timeout=poll_s)
                     # no progress shown once it is done: its results follow at once
@@ -177,4 +190,5 @@ class LatestRun(Generic[Job, Outcome]):
         except BaseException:
             with self._lock:
                 self._busy, self._waiting, self._has_waiting = False, None, False
+                self._computing = None
             raise

@@ -3,8 +3,7 @@
 Panel-free core of the dashboard's what-if tools (the widgets are in ``whatif_view.py``). A
 :class:`WhatIfSession` keeps up to :data:`MAX_PINNED` pinned runs, each with its own inputs and
 the :class:`~model.pipeline.Results` it had when pinned: pinning never recomputes, and a pinned
-run keeps its results whatever the current scenario does later. Every dashboard session owns its
-own :class:`WhatIfSession`; nothing here is shared between sessions.
+run keeps its results whatever the current scenario does later. Each session has its own.
 
 The session file is one JSON object: a format tag, a version, the inputs (never the results) of
 every pinned run with its name, visibility and colour, the reference run and, optionally, the
@@ -25,6 +24,7 @@ from typing import Any
 
 import pandas as pd
 
+from dashboard.parsed import summary_of
 from model.params import SECTIONS, Scenario
 from model.params.measured_profile import admit_profile, data_folder, parse_profile
 from model.pipeline import Results, StageCache, run
@@ -423,7 +423,7 @@ class WhatIfSession:
         ]
         if current is not None:
             inputs = flat_inputs(json.loads(current.scenario_json))
-            rows.append(ComparedRun(CURRENT_LABEL, current.summary(), inputs))
+            rows.append(ComparedRun(CURRENT_LABEL, summary_of(current), inputs))
         if not rows:
             raise ValueError("nothing to compare: no pinned run and no current run")
         names = [r.name for r in rows]

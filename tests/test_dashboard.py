@@ -30,6 +30,7 @@ from dashboard.inputs import HIDDEN, PRIMARY, SWITCHES
 from dashboard.longterm_view import LONGTERM_PLOTS
 from dashboard.report import package_version, report_html
 from dashboard.scheduler import RunCancelled
+from dashboard.whatif import CURRENT_LABEL
 from model import scenarios
 from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import SECTIONS, Scenario, display_label, display_unit, parameter_of
@@ -607,6 +608,57 @@ def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeyp
         board.scenario.train.speed_kmh += 5.0  # a run that redraws every plot
     assert board.runs.results.scenario.train.speed_kmh == cheap_scenario().train.speed_kmh + 5.0
     assert len(indexings) <= 2  # the results, and the other model's curve after them
+
+
+def test_a_change_leaves_the_pinned_runs_alone_and_the_axes_cover_them(
+    cache, cheap_scenario, monkeypatch
+):
+    """With a run pinned, a speed change redraws each plot's current run in place but neither
+    updates the pinned runs' subplot nor ranges their data again (both cost most of what 8
+    pinned runs added to the server's update); the axes still cover the pinned run where it
+    outlasts the current one, and its legend entry stays, below the axes."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.scenario.train.speed_kmh = 60.0  # a slower passage: a longer time history
+        board.refresh()
+        board.whatif.pin_button.clicks += 1
+        drawn = {
+            key: next(iter(pane._plots.values()))[0]
+            for key, pane in board.passage.plots.panes.items()
+        }
+        pinned_updates, rangings = [], []
+        for plot in drawn.values():
+            (subplot,) = [
+                p for p in plot.subplots.values() if isinstance(p.current_frame, plots.PinnedRuns)
+            ]
+            monkeypatch.setattr(subplot, "update_frame", lambda *a, **k: pinned_updates.append(a))
+        contours_range = hv.Contours.range
+        monkeypatch.setattr(
+            hv.Contours, "range", lambda *a, **k: rangings.append(a) or contours_range(*a, **k)
+        )
+        board.scenario.train.speed_kmh = 100.0
+    assert board.runs.results.scenario.train.speed_kmh == 100.0
+    assert not pinned_updates and not rangings
+    for key in ("block_displacement", "invert_load"):
+        frame = _shown(board, key)
+        (pinned,) = [layer for layer in frame if isinstance(layer, plots.PinnedRuns)]
+        current = _curves(frame)[CURRENT_LABEL]
+        end, current_end = pinned.dimension_values(0).max(), current.dimension_values(0).max()
+        figure = drawn[key].state
+        assert current_end < end <= figure.x_range.end, key
+        assert drawn[key].handles["plot"] is figure  # updated in place
+        (legend,) = figure.legend
+        assert legend in figure.below, key
+        named = {
+            name
+            for item in legend.items
+            if hasattr(item.label, "field")  # an entry per value of a column: the pinned runs
+            for renderer in item.renderers
+            for name in renderer.data_source.data[item.label.field]
+        }
+        assert named == set(plots.legend_labels(board.whatif.session.names())), key
 
 
 def test_closing_a_session_drops_its_results(dashboard):

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import param
 import pytest
+from holoviews.streams import Pipe
 
 from dashboard import plots
 from dashboard.app import Dashboard
@@ -86,9 +87,45 @@ def test_legend_entries_side_by_side_keep_apart():
     assert legend.spacing == plots.LEGEND_SPACING_PX >= 10
 
 
+def test_a_legend_stays_below_the_axes_through_updates():
+    """HoloViews took a legend placed below the axes out of its figure and put it back on
+    every update, and the browser laid the figure out again each time: it is now moved there
+    once, and an update leaves the figure's panels alone."""
+    stream = Pipe(data=1.0)
+    labels = ["Current run", "Winkler beam"]
+
+    def draw(data):
+        curves = [hv.Curve([0, data], label=labels[0]), hv.Curve([1, 0], label=labels[1])]
+        return hv.Overlay(curves).opts(**plots.legend_options(labels))
+
+    figure = hv.renderer("bokeh").get_plot(hv.DynamicMap(draw, streams=[stream])).state
+    (legend,) = figure.legend
+    assert legend in figure.below and legend not in figure.center
+    changes = []
+    figure.on_change("below", lambda attr, old, new: changes.append(new))
+    stream.send(2.0)
+    assert figure.legend[0] is legend and legend in figure.below and not changes
+    assert [item.label.value for item in legend.items] == labels
+
+
 @pytest.fixture(scope="module")
 def cheap_results(cheap_scenario, cache):
     return run(cheap_scenario(), cache=cache)
+
+
+def test_a_long_legend_makes_its_plot_taller(cheap_results):
+    """8 pinned runs with long names (one legend column, ten entries) squeezed the axes of a
+    plot of fixed height to a strip and cut off the legend's last entries: the plot grows by a
+    row's height for each row beyond what it holds."""
+    names = [f"pinned run number {k + 1} at {60 + 10 * k} km/h" for k in range(8)]
+    overlays = [(name, cheap_results, "#1f77b4") for name in names]
+    alone = hv.render(plots.block_displacement_plot(cheap_results), backend="bokeh")
+    pinned = plots.block_displacement_plot(cheap_results, overlays=overlays)
+    assert plots.legend_options(plots.legend_labels(names))["legend_cols"] == 1
+    rows = len(names) + 2  # the current run and the Winkler beam
+    extra = plots.LEGEND_ROW_PX * (rows - plots.LEGEND_FREE_ROWS)
+    assert alone.height == plots.PLOT_HEIGHT
+    assert hv.render(pinned, backend="bokeh").height == plots.PLOT_HEIGHT + extra
 
 
 def _style(element: hv.Element) -> dict:

@@ -25,22 +25,32 @@ def _record(started, finished):
 
 
 def test_a_request_while_idle_runs_at_once(pool):
-    runs = LatestRun(lambda job: job * 10, pool)
+    """A request while idle starts computing before anything drains the queue (the page's
+    other work on a change does not delay the run)."""
+    computing = threading.Event()
+
+    def compute(job):
+        computing.set()
+        return job * 10
+
+    runs = LatestRun(compute, pool)
     started, finished = [], []
     assert runs.request(1) is True
+    assert computing.wait(timeout=60)
     asyncio.run(runs.drain(*_record(started, finished)))
     assert started == [1] and finished == [(1, 10)] and not runs.busy
 
 
 def _drain_while_job_1_computes(runs, computed, release, meanwhile):
-    """Request job 1, call ``meanwhile()`` once it computes, then let it finish and drain the
-    queue; returns the (started, finished) records."""
+    """Request job 1, call ``meanwhile()`` once it computes and the drain has started it (it
+    computes from its request on), then let it finish and drain the queue; returns the
+    (started, finished) records."""
     started, finished = [], []
 
     async def scenario():
         assert runs.request(1)
         draining = asyncio.create_task(runs.drain(*_record(started, finished), poll_s=0.01))
-        while not computed:
+        while not (computed and started):
             await asyncio.sleep(0.01)
         meanwhile()
         release.set()
@@ -103,6 +113,17 @@ def test_a_cancelled_queue_drops_its_waiting_job_and_the_computing_ones_outcome(
     started, finished = _drain_while_job_1_computes(runs, computed, release, request_then_cancel)
     assert computed == [1] and started == [1] and finished == [] and not runs.busy
     assert runs.request(3) is False and not runs.busy
+
+
+def test_a_job_cancelled_before_the_drain_is_not_shown(pool):
+    """A session closed between a request (its job computing at once) and the drain: the
+    drain waits for the job but neither starts nor finishes it on the page."""
+    runs = LatestRun(lambda job: job, pool)
+    started, finished = [], []
+    assert runs.request(1) is True
+    runs.cancel()
+    asyncio.run(runs.drain(*_record(started, finished)))
+    assert started == [] and finished == [] and not runs.busy
 
 
 def test_sessions_compute_in_parallel(pool):
