@@ -5,7 +5,7 @@ Prints, in one run (median and samples where repeated):
 
 * a speed typed on the ``paper`` page (six-car train) until every plot shows new data and is
   painted, next to the pipeline's own time for that change (sum of its stage times, as the
-  page reports them) and their ratio (target ≤ 1.5);
+  page reports them) and their ratio (issue 27: ≤ 1.3; the first dashboard issue asked ≤ 1.5);
 * a soil Young's modulus typed on the ``paper`` page until the soil plots are repainted
   (target ≤ 1.0 s).
 
@@ -189,7 +189,7 @@ def typed_changes(browser, url: str, repeat: int) -> list[tuple[str, str, str, s
         rows.append(("  as the test driver sees it", *spread(driver, " s"), ""))
         rows.append(("  pipeline's own time for that change", *spread(pipeline, " s"), ""))
     ratios = [b / p for b, _, p in speed]
-    rows.append(("  speed: ratio in the page / pipeline", *spread(ratios), "≤ 1.5"))
+    rows.append(("  speed: ratio in the page / pipeline", *spread(ratios), "≤ 1.3"))
     rows.append(
         (
             "  first speed change after opening, in the page",
