@@ -57,11 +57,11 @@ stays elastic (changes the result by < 1e-6 of it, docs/fe_section.md)."""
 
 FE_CPU_SECONDS_PER_ELEMENT_STEP = {
     "elastic": 51.0 / (8904 * 1851),
-    "mohr_coulomb": 192.0 / (8904 * 1851),
+    "mohr_coulomb": 255.0 / (8904 * 1851),
 }
-"""CPU time per soil element and time step (s), from docs/fe_section.md's speed table: one
+"""CPU time per soil element and time step (s), from docs/fe_section.md's speed figures: one
 passage of the paper case on the default mesh (8904 soil elements, 1851 steps) took 51 s with
-the elastic law and 192 s (mean of three runs) with Mohr–Coulomb on the 2-core development
+the elastic law and 255 s with Mohr–Coulomb (on an idle core) on the 2-core development
 machine. The plastic law's cost grows with the yielding (iterations per step), so the estimate
 is a guide, not a bound."""
 
@@ -84,7 +84,7 @@ def fe_time_hint(n_elements: int, steps_per_passage: int, passages: int, soil_la
     Returns
     -------
     str
-        E.g. "the FE section: 8904 elements × 1851 time steps × 1 passage, about 3 min of CPU
+        E.g. "the FE section: 8904 elements × 1851 time steps × 1 passage, about 4 min of CPU
         time (...)".
     """
     seconds = FE_CPU_SECONDS_PER_ELEMENT_STEP[soil_law] * n_elements * steps_per_passage * passages
