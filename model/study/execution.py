@@ -25,6 +25,11 @@ import dask
 import numba
 import pandas as pd
 
+# Imported with the module, not when the first study starts: the import takes ~0.25 s, which
+# is the process's once, not a study's.
+from distributed import Client, LocalCluster, as_completed
+from distributed.comm import connect
+
 from model.params import Scenario
 from model.pipeline import StageCache, run
 from model.study.definition import Study, check_run_count, define_study
@@ -119,8 +124,6 @@ def study_client(
     processes (forked, :func:`worker_start_method`; no diagnostics dashboard), closed on exit.
     An unreachable address is a one-line ``ValueError``.
     """
-    from distributed import Client, LocalCluster
-
     if isinstance(scheduler, Client):
         yield scheduler
         return
@@ -203,8 +206,6 @@ def check_scheduler(address: str, timeout_s: float) -> None:
 
 async def _scheduler_identity(address: str, timeout_s: float):
     """The ``identity`` reply of the server at ``address`` (Dask's comm protocol)."""
-    from distributed.comm import connect
-
     comm = await asyncio.wait_for(connect(address, timeout=timeout_s), timeout_s)
     try:
         await asyncio.wait_for(comm.write({"op": "identity", "reply": True}), timeout_s)
@@ -367,8 +368,6 @@ def collect_tasks(
     (rows, cancelled)
         Rows by the task's place in ``tasks``; True when stopped by ``cancel`` or Ctrl-C.
     """
-    from distributed import as_completed
-
     token = uuid.uuid4().hex[:12]
     inputs = [row for row, _, _ in tasks]
     futures = [None] * len(tasks)
