@@ -1,7 +1,9 @@
 """Memory probe for ``deploy/smoke-test --probe`` (loaded with ``panel serve --setup``).
 
 On SIGUSR1 the server writes, to the file named by ``TUNNELSETTLE_PROBE_FILE``: its RSS, the
-RSS after ``gc.collect()`` and glibc's ``malloc_trim(0)``, the number of live objects by type,
+RSS after ``gc.collect()`` and after glibc's ``malloc_trim(0)``, the resident memory by kind of
+mapping, the allocators' own totals (Python's arenas, glibc's heaps: where freed memory stays),
+the modules loaded, the number of live objects by type,
 the stage cache's entries and the number of Bokeh sessions alive. With
 ``TUNNELSETTLE_PROBE_TRACEMALLOC=1`` it also traces allocations from the start and reports the
 15 source lines whose live memory grew most since the previous probe. A diagnostic, not part
@@ -29,6 +31,75 @@ def _rss_mb() -> float:
         if line.startswith("VmRSS:"):
             return round(int(line.split()[1]) / 1024, 1)
     return float("nan")
+
+
+def _mapped_mb() -> dict:
+    """Resident MB by kind of mapping (/proc/self/smaps): the main heap, anonymous mappings
+    (thread heaps, large blocks, Python's arenas), thread stacks and files."""
+    kinds, kind = collections.Counter(), None
+    for line in Path("/proc/self/smaps").read_text().splitlines():
+        head = line.split()
+        if "-" in head[0] and ":" not in head[0]:
+            name = head[5] if len(head) > 5 else ""
+            if name == "[heap]":
+                kind = "heap"
+            elif not name:
+                kind = "anonymous"
+            else:
+                kind = "stack" if name.startswith("[stack") else "file"
+            kinds[kind + " mappings"] += 1
+        elif head[0] == "Rss:":
+            kinds[kind] += int(head[1])
+    return {k: v if k.endswith("mappings") else round(v / 1024, 1) for k, v in kinds.items()}
+
+
+def _allocator_stats() -> dict:
+    """Python's small-object allocator (``sys._debugmallocstats``) and glibc's heaps
+    (``malloc_info``), as the totals of their reports."""
+    import re
+    import sys
+    import tempfile
+
+    with tempfile.TemporaryFile("w+") as out:
+        sys.stderr.flush()
+        saved = os.dup(2)
+        os.dup2(out.fileno(), 2)
+        try:
+            sys._debugmallocstats()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        out.seek(0)
+        text = out.read()
+    stats = {}
+    keys = ("arenas allocated current", "bytes in allocated blocks", "bytes in available blocks")
+    for key in keys:
+        found = re.search(re.escape(key) + r"\s*=\s*([\d,]+)", text)
+        if found:
+            stats["pymalloc " + key] = int(found.group(1).replace(",", ""))
+    libc = ctypes.CDLL("libc.so.6")
+    libc.open_memstream.restype = ctypes.c_void_p
+    buffer, size = ctypes.c_char_p(), ctypes.c_size_t()
+    stream = libc.open_memstream(ctypes.byref(buffer), ctypes.byref(size))
+    libc.malloc_info(0, ctypes.c_void_p(stream))
+    libc.fclose(ctypes.c_void_p(stream))
+    info = ctypes.string_at(buffer, size.value).decode()
+    libc.free(buffer)
+    tail = info[info.rfind("</heap>") :]
+    for kind in ("fast", "rest"):
+        found = re.search(rf'<total type="{kind}" count="(\d+)" size="(\d+)"', tail)
+        if found:
+            stats[f"glibc free {kind} MB"] = round(int(found.group(2)) / 2**20, 1)
+    for kind in ("current", "max"):
+        found = re.search(rf'<system type="{kind}" size="(\d+)"', tail)
+        if found:
+            stats[f"glibc system {kind} MB"] = round(int(found.group(1)) / 2**20, 1)
+    stats["glibc arenas"] = info.count("<heap nr=")
+    found = re.search(r'<total type="mmap" count="(\d+)" size="(\d+)"', tail)
+    if found:
+        stats["glibc mmapped blocks"] = int(found.group(1))
+        stats["glibc mmapped MB"] = round(int(found.group(2)) / 2**20, 1)
+    return stats
 
 
 def _name(o) -> str:
@@ -91,7 +162,8 @@ def _probe() -> dict:
     import panel as pn
 
     rss = _rss_mb()
-    gc.collect()
+    collected = gc.collect()
+    rss_after_gc = _rss_mb()
     try:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
     except OSError:
@@ -101,8 +173,13 @@ def _probe() -> dict:
     caches = [o for o in objects if type(o).__name__ == "StageCache"]
     report = {
         "rss_mb": rss,
+        "gc_collected": collected,
+        "rss_after_gc_mb": rss_after_gc,
         "rss_after_trim_mb": _rss_mb(),
+        "mapped_mb": _mapped_mb(),
+        "allocators": _allocator_stats(),
         "gc_objects": len(objects),
+        "modules": sorted(__import__("sys").modules),
         "types": dict(types),
         "cache_entries": [{k: len(v) for k, v in c._entries.items()} for c in caches],
         "ndarray_mb": _ndarray_mb(objects),
