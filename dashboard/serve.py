@@ -3,9 +3,10 @@ installed package, with a light first page.
 
 ``panel serve`` needs the path of the app's module; after a plain (not editable) install there is
 no ``dashboard/app.py`` under the working directory, so the path is that of the installed
-:mod:`dashboard.app`. The server runs in this process (it gets Ctrl-C and signals directly),
-with ``--warm`` unless ``--no-warm``; options this command does not know are handed to
-``panel serve`` unchanged (e.g. ``--allow-websocket-origin``)::
+:mod:`dashboard.app`. The server runs in this process (it gets Ctrl-C and signals directly; the
+command first starts itself again in it, with :data:`SERVER_ALLOCATOR`), with ``--warm`` unless
+``--no-warm``; options this command does not know are handed to ``panel serve`` unchanged (e.g.
+``--allow-websocket-origin``)::
 
     tunnelsettle serve                      # http://localhost:5006/app
     tunnelsettle serve --port 5010 --address 0.0.0.0 --allow-websocket-origin host:5010
@@ -145,14 +146,40 @@ def compress_responses() -> None:
     Serve.customize_kwargs = compressed
 
 
+ALLOCATOR_ENV = "PYTHONMALLOC"
+SERVER_ALLOCATOR = "malloc"
+"""Python's allocator in the server process: the C library's ``malloc`` for every object, not
+Python's own small-object allocator. After a burst of sessions, the few objects made during it
+that live on keep Python's 1 MiB arenas from going back to the system; with ``malloc`` the
+trimmed heap (:mod:`dashboard.memory`) goes back page by page. ``deploy/smoke-test`` measured a
+second burst of 20 sessions growing the server by +2, +39 and +59 MB with Python's allocator
+and by +1 and +3 MB with ``malloc`` (docs/deploy.md); the pipeline's run times did not change."""
+
+
+def reexec_with_server_allocator(argv: list[str], environ=None, execute=os.execve) -> None:
+    """Start this command again, in this process, with :data:`SERVER_ALLOCATOR` (Python picks
+    its allocator at start, so it cannot change afterwards). Nothing happens where
+    ``PYTHONMALLOC`` is already set (the user's choice, or this re-execution) or off POSIX."""
+    environ = os.environ if environ is None else environ
+    if environ.get(ALLOCATOR_ENV) or os.name != "posix":
+        return
+    execute(
+        sys.executable,
+        [sys.executable, "-m", "dashboard.serve", *argv],
+        {**environ, ALLOCATOR_ENV: SERVER_ALLOCATOR},
+    )
+
+
 def main(argv: list[str] | None = None, prog: str = "tunnelsettle serve") -> int:
     """Run the dashboard's server in this process until it stops; returns its exit code."""
+    argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(prog)
     args, extra = parser.parse_known_args(argv)
     try:
         command = serve_command(args, extra)
     except ValueError as error:
         parser.error(str(error))
+    reexec_with_server_allocator(argv)
     print(
         f"dashboard at http://{args.address or 'localhost'}:{args.port}/app: open it once the "
         "server's log says 'Bokeh app running at' (loading the packages takes up to a minute "

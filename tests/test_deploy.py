@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 import pytest
 from panel.command.serve import Serve
@@ -54,3 +55,29 @@ def test_missing_or_short_secret_refused(tmp_path, monkeypatch, secret):
 def test_missing_password_file_refused(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="does not exist"):
         _command(["--basic-auth", str(tmp_path / "no.json")], {}, monkeypatch)
+
+
+def test_serve_starts_again_with_the_c_allocator_unless_an_allocator_is_chosen():
+    calls = []
+    argv = ["--port", "5010", "--allow-websocket-origin", "h:5010"]
+    serve.reexec_with_server_allocator(argv, {"HOME": "/h"}, lambda *call: calls.append(call))
+    assert calls == [
+        (
+            sys.executable,
+            [sys.executable, "-m", "dashboard.serve", *argv],
+            {"HOME": "/h", "PYTHONMALLOC": "malloc"},
+        )
+    ]
+    calls.clear()  # the started again process, or a user's own choice: no second start
+    for chosen in ("malloc", "pymalloc"):
+        serve.reexec_with_server_allocator(argv, {"PYTHONMALLOC": chosen}, calls.append)
+    assert calls == []
+
+
+def test_serve_refuses_bad_options_before_starting_again(tmp_path, monkeypatch):
+    monkeypatch.setattr(serve.os, "environ", {})
+    started = []
+    monkeypatch.setattr(serve, "reexec_with_server_allocator", started.append)
+    with pytest.raises(SystemExit):
+        serve.main(["--basic-auth", str(tmp_path / "no.json")])
+    assert started == []
