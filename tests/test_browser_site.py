@@ -9,6 +9,7 @@ table keeps the value it had.
 from __future__ import annotations
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeoutError
 from playwright.sync_api import expect, sync_playwright
 from test_browser import RUN_WAIT_MS, launch_chromium, open_dashboard, serve_app
 
@@ -83,28 +84,38 @@ def test_a_borehole_csv_fills_the_table_and_the_plots_draw_its_boundaries(site_p
     )
 
 
+def _type_into_cell(page, cell, text: str) -> None:
+    """Type ``text`` into a table cell as a user does: click until its editor opens (a redraw of
+    the table, after a run, can take the click), replace what it holds, Enter."""
+    for _ in range(5):
+        cell.click()
+        try:
+            cell.locator("input").wait_for(timeout=5000)
+            break
+        except PlaywrightTimeoutError:
+            continue
+    page.keyboard.press("Control+A")
+    page.keyboard.type(text)
+    page.keyboard.press("Enter")
+
+
 def test_a_table_edit_reruns_and_a_refused_one_says_why(site_page):
     page = site_page
     before = _statement(page)
     cell = (
         page.locator(".layer-table .tabulator-row").nth(1).locator('[tabulator-field="thickness"]')
     )
-    cell.click()
-    page.keyboard.press("Control+A")
-    page.keyboard.type("25")
-    page.keyboard.press("Enter")
+    _type_into_cell(page, cell, "25")
     page.wait_for_function(
         "(before) => !document.body.innerText.includes(before)", arg=before, timeout=RUN_WAIT_MS
     )
     expect(cell).to_have_text("25")
     # The other tunnel–soil model's run may follow and redraw the tab; edit once the page is
     # settled, as a user would (in one CI run the second edit, typed while the page may still
-    # have been updating, brought no refusal within 120 s).
+    # have been updating, brought no refusal within 120 s; another, after that wait, none
+    # either: the edit is now typed once the cell's editor is open).
     page.locator('.comparison-status:not([data-state="computing"])').wait_for(timeout=RUN_WAIT_MS)
-    cell.click()
-    page.keyboard.press("Control+A")
-    page.keyboard.type("-5")
-    page.keyboard.press("Enter")
+    _type_into_cell(page, cell, "-5")
     refusal = page.get_by_text("thickness = -5 m is outside the allowed range").first
     refusal.wait_for(timeout=RUN_WAIT_MS)
     assert "site.layers[1]" in refusal.inner_text() and "'soft clay'" in refusal.inner_text()
