@@ -159,13 +159,16 @@ and by +1 and +3 MB with ``malloc`` (docs/deploy.md); the pipeline's run times d
 def reexec_with_server_allocator(argv: list[str], environ=None, execute=os.execve) -> None:
     """Start this command again, in this process, with :data:`SERVER_ALLOCATOR` (Python picks
     its allocator at start, so it cannot change afterwards). Nothing happens where
-    ``PYTHONMALLOC`` is already set (the user's choice, or this re-execution) or off POSIX."""
+    ``PYTHONMALLOC`` is already set (the user's choice, or this re-execution) or off POSIX.
+
+    ``-P`` keeps the working directory off ``sys.path``: started from another checkout, the
+    command still serves the installed package, not that folder's ``dashboard``."""
     environ = os.environ if environ is None else environ
     if environ.get(ALLOCATOR_ENV) or os.name != "posix":
         return
     execute(
         sys.executable,
-        [sys.executable, "-m", "dashboard.serve", *argv],
+        [sys.executable, "-P", "-m", "dashboard.serve", *argv],
         {**environ, ALLOCATOR_ENV: SERVER_ALLOCATOR},
     )
 

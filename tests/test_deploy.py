@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import subprocess
 import sys
 
 import pytest
@@ -64,7 +66,7 @@ def test_serve_starts_again_with_the_c_allocator_unless_an_allocator_is_chosen()
     assert calls == [
         (
             sys.executable,
-            [sys.executable, "-m", "dashboard.serve", *argv],
+            [sys.executable, "-P", "-m", "dashboard.serve", *argv],
             {"HOME": "/h", "PYTHONMALLOC": "malloc"},
         )
     ]
@@ -72,6 +74,23 @@ def test_serve_starts_again_with_the_c_allocator_unless_an_allocator_is_chosen()
     for chosen in ("malloc", "pymalloc"):
         serve.reexec_with_server_allocator(argv, {"PYTHONMALLOC": chosen}, calls.append)
     assert calls == []
+
+
+def test_serve_started_again_ignores_a_dashboard_package_in_the_working_directory(tmp_path):
+    shadow = tmp_path / "dashboard"
+    shadow.mkdir()
+    (shadow / "__init__.py").write_text("")
+    (shadow / "serve.py").write_text("print('the working directory was served')")
+
+    def execute(executable, args, environ):
+        done = subprocess.run(args, env=environ, cwd=tmp_path, capture_output=True, text=True)
+        outputs.append(done.stdout + done.stderr)
+
+    outputs = []
+    environ = {k: v for k, v in os.environ.items() if k != "PYTHONMALLOC"}
+    serve.reexec_with_server_allocator(["--help"], environ, execute)
+    assert "usage: " in outputs[0]
+    assert "working directory" not in outputs[0]
 
 
 def test_serve_refuses_bad_options_before_starting_again(tmp_path, monkeypatch):
