@@ -14,6 +14,10 @@ sessions had been discarded (docs/deploy.md, "Memory after sessions close"):
   230 MB over four sessions that were gone; ``malloc_trim`` gave it back). :func:`release_memory`
   collects cycles and trims the heaps; :func:`release_soon` does it once after a burst of
   sessions closes, not once per session (a collection takes about 0.2 s of the event loop).
+
+A later CI run found a third: after a burst the heaps still held 50–60 MB more than before it
+now and then, pages pinned by objects scattered over where the burst's arrays had been;
+``tunnelsettle serve`` therefore maps large blocks by themselves (:func:`map_large_blocks`).
 """
 
 from __future__ import annotations
@@ -25,6 +29,14 @@ from collections.abc import Callable
 
 RELEASE_DELAY_S = 2.0
 """Seconds after the last session closed before the memory is given back."""
+
+LARGE_BLOCK_BYTES = 4 * 2**20
+"""Blocks of this size or more get their own mapping in the server (:func:`map_large_blocks`).
+Below it: a 2D soil run's spectra (1–4 MB), whose fresh mappings' page faults made that stage
+15–30 % slower with a 1 MiB threshold."""
+
+M_MMAP_THRESHOLD = -3
+"""``mallopt`` parameter number of glibc's mapping threshold (``<malloc.h>``)."""
 
 _libc: ctypes.CDLL | None = None
 _pending: list = []
@@ -43,8 +55,8 @@ def release_links(root) -> int:
     return removed
 
 
-def _malloc_trim() -> bool:
-    """glibc's ``malloc_trim(0)``: freed heap memory back to the system (False elsewhere)."""
+def _glibc() -> ctypes.CDLL | None:
+    """The C library if it is glibc (it has ``malloc_trim``), else None."""
     global _libc
     if _libc is None:
         name = ctypes.util.find_library("c")
@@ -53,10 +65,33 @@ def _malloc_trim() -> bool:
             _libc.malloc_trim  # noqa: B018 - present in glibc only
         except (OSError, AttributeError, TypeError):
             _libc = False  # type: ignore[assignment]
-    if not _libc:
+    return _libc or None
+
+
+def _malloc_trim() -> bool:
+    """glibc's ``malloc_trim(0)``: freed heap memory back to the system (False elsewhere)."""
+    libc = _glibc()
+    if libc is None:
         return False
-    _libc.malloc_trim(0)
+    libc.malloc_trim(0)
     return True
+
+
+def map_large_blocks(threshold_bytes: int = LARGE_BLOCK_BYTES) -> bool:
+    """Every block of at least ``threshold_bytes`` in its own mapping, from now on (glibc's
+    ``mallopt(M_MMAP_THRESHOLD, ...)``); returns whether it could be set (glibc only).
+
+    glibc maps a large block by itself, but raises that threshold to the size of each such
+    block freed (up to 32 MiB), so after a first run a run's arrays (4–30 MB: 181 of the 195
+    MB of a paper-case run at 33 km/h) live in the heaps. A burst of sessions then spreads the heaps over gigabytes, and the
+    objects made during it that live on (the stage cache refilled after it) are scattered
+    over them: a trim cannot give back a page that holds any of them. With the threshold
+    fixed, a freed array's mapping goes back at once and the heaps stay small.
+    """
+    libc = _glibc()
+    if libc is None:
+        return False
+    return bool(libc.mallopt(M_MMAP_THRESHOLD, threshold_bytes))
 
 
 def release_memory() -> bool:

@@ -4,7 +4,8 @@ installed package, with a light first page.
 ``panel serve`` needs the path of the app's module; after a plain (not editable) install there is
 no ``dashboard/app.py`` under the working directory, so the path is that of the installed
 :mod:`dashboard.app`. The server runs in this process (it gets Ctrl-C and signals directly; the
-command first starts itself again in it, with :data:`SERVER_ALLOCATOR`), with ``--warm`` unless
+command first starts itself again in it, with :data:`SERVER_ALLOCATOR`; large blocks get
+mappings of their own, :func:`~dashboard.memory.map_large_blocks`), with ``--warm`` unless
 ``--no-warm``; options this command does not know are handed to ``panel serve`` unchanged (e.g.
 ``--allow-websocket-origin``)::
 
@@ -33,6 +34,8 @@ import importlib.util
 import os
 import sys
 from pathlib import Path
+
+from dashboard.memory import map_large_blocks
 
 DEFAULT_PORT = 5006  # Panel's
 COOKIE_SECRET_ENV = "TUNNELSETTLE_COOKIE_SECRET"
@@ -192,6 +195,7 @@ def main(argv: list[str] | None = None, prog: str = "tunnelsettle serve") -> int
     )
     from panel.command import main as panel_main
 
+    map_large_blocks()
     use_light_resources()
     compress_responses()
     sys.argv = command

@@ -100,3 +100,18 @@ def test_serve_refuses_bad_options_before_starting_again(tmp_path, monkeypatch):
     with pytest.raises(SystemExit):
         serve.main(["--basic-auth", str(tmp_path / "no.json")])
     assert started == []
+
+
+def test_served_process_maps_large_blocks_before_the_server_starts(monkeypatch):
+    import panel.command
+
+    steps = []
+    monkeypatch.setattr(serve, "reexec_with_server_allocator", lambda argv: steps.append("reexec"))
+    monkeypatch.setattr(serve, "map_large_blocks", lambda: steps.append("map"))
+    monkeypatch.setattr(serve, "use_light_resources", lambda: None)
+    monkeypatch.setattr(serve, "compress_responses", lambda: None)
+    monkeypatch.setattr(panel.command, "main", lambda: steps.append(list(sys.argv)))
+    monkeypatch.setattr(sys, "argv", ["tunnelsettle"])
+    assert serve.main(["--no-warm"]) == 0
+    assert steps[:2] == ["reexec", "map"]
+    assert steps[2][:2] == ["panel", "serve"]

@@ -9,9 +9,12 @@ of closed sessions (the server's RSS grew 230 MB over four sessions that were go
 from __future__ import annotations
 
 import gc
+import subprocess
+import sys
 import weakref
 from functools import partial
 
+import pytest
 from bokeh.document import Document
 from panel.links import Callback
 
@@ -51,6 +54,43 @@ def test_release_soon_trims_once_after_a_burst():
 
 def test_release_memory_trims_the_heap_on_glibc():
     assert memory.release_memory() in (True, False)  # False only without glibc
+
+
+MAPPED_BYTES_AFTER_A_LARGE_FREE = """
+import ctypes, sys
+import numpy as np
+from dashboard import memory
+
+class MallInfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in (
+        "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
+        "fordblks", "keepcost")]
+
+libc = memory._glibc()
+libc.mallinfo2.restype = MallInfo2
+if sys.argv[1] == "mapped":
+    assert memory.map_large_blocks()
+large = np.ones(16 * 2**20 // 8)
+del large  # glibc raises its own threshold to a freed mapped block (up to 32 MiB)
+before = libc.mallinfo2().hblkhd
+array = np.ones(5 * 2**20 // 8)  # a run's typical history: 5 MiB
+print(libc.mallinfo2().hblkhd - before)
+"""
+
+
+@pytest.mark.skipif(
+    memory._glibc() is None or not hasattr(memory._glibc(), "mallinfo2"), reason="glibc only"
+)
+def test_large_blocks_keep_mappings_of_their_own_after_a_larger_one_was_freed():
+    def mapped_bytes(mode: str) -> int:
+        done = subprocess.run(
+            [sys.executable, "-c", MAPPED_BYTES_AFTER_A_LARGE_FREE, mode],
+            capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        return int(done.stdout)
+
+    assert mapped_bytes("glibc's default") == 0  # the 5 MiB array went into the heap
+    assert mapped_bytes("mapped") >= 5 * 2**20
 
 
 def test_session_closed_bound_to_a_close_is_accepted_by_bokeh_and_closes():
