@@ -83,10 +83,11 @@ def map_large_blocks(threshold_bytes: int = LARGE_BLOCK_BYTES) -> bool:
 
     glibc maps a large block by itself, but raises that threshold to the size of each such
     block freed (up to 32 MiB), so after a first run a run's arrays (4–30 MB: 181 of the 195
-    MB of a paper-case run at 33 km/h) live in the heaps. A burst of sessions then spreads the heaps over gigabytes, and the
-    objects made during it that live on (the stage cache refilled after it) are scattered
-    over them: a trim cannot give back a page that holds any of them. With the threshold
-    fixed, a freed array's mapping goes back at once and the heaps stay small.
+    MB of a paper-case run at 33 km/h) live in the heaps. A burst of sessions then spreads
+    the heaps over gigabytes, and the objects made during it that live on (the stage cache
+    refilled after it) are scattered over them: a trim cannot give back a page that holds
+    any of them. With the threshold fixed, a freed array's mapping goes back at once and the
+    heaps stay small.
     """
     libc = _glibc()
     if libc is None:
