@@ -55,7 +55,7 @@ def release_links(root) -> int:
     return removed
 
 
-def _glibc() -> ctypes.CDLL | None:
+def glibc() -> ctypes.CDLL | None:
     """The C library if it is glibc (it has ``malloc_trim``), else None."""
     global _libc
     if _libc is None:
@@ -70,7 +70,7 @@ def _glibc() -> ctypes.CDLL | None:
 
 def _malloc_trim() -> bool:
     """glibc's ``malloc_trim(0)``: freed heap memory back to the system (False elsewhere)."""
-    libc = _glibc()
+    libc = glibc()
     if libc is None:
         return False
     libc.malloc_trim(0)
@@ -89,7 +89,7 @@ def map_large_blocks(threshold_bytes: int = LARGE_BLOCK_BYTES) -> bool:
     any of them. With the threshold fixed, a freed array's mapping goes back at once and the
     heaps stay small.
     """
-    libc = _glibc()
+    libc = glibc()
     if libc is None:
         return False
     return bool(libc.mallopt(M_MMAP_THRESHOLD, threshold_bytes))

@@ -21,6 +21,8 @@ import signal
 import tracemalloc
 from pathlib import Path
 
+from dashboard.memory import glibc
+
 _previous: list = []
 if os.environ.get("TUNNELSETTLE_PROBE_TRACEMALLOC"):
     tracemalloc.start(12)
@@ -77,7 +79,7 @@ def _allocator_stats() -> dict:
         found = re.search(re.escape(key) + r"\s*=\s*([\d,]+)", text)
         if found:
             stats["pymalloc " + key] = int(found.group(1).replace(",", ""))
-    libc = ctypes.CDLL("libc.so.6")
+    libc = glibc()
     libc.open_memstream.restype = ctypes.c_void_p
     buffer, size = ctypes.c_char_p(), ctypes.c_size_t()
     stream = libc.open_memstream(ctypes.byref(buffer), ctypes.byref(size))
@@ -164,10 +166,7 @@ def _probe() -> dict:
     rss = _rss_mb()
     collected = gc.collect()
     rss_after_gc = _rss_mb()
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except OSError:
-        pass
+    glibc().malloc_trim(0)
     objects = gc.get_objects()
     types = collections.Counter(f"{type(o).__module__}.{type(o).__qualname__}" for o in objects)
     caches = [o for o in objects if type(o).__name__ == "StageCache"]

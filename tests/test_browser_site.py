@@ -93,7 +93,9 @@ def _type_into_cell(page, cell, text: str) -> None:
             cell.locator("input").wait_for(timeout=5000)
             break
         except PlaywrightTimeoutError:
-            continue
+            pass
+    else:
+        pytest.fail("the table cell's editor did not open after 5 clicks")
     page.keyboard.press("Control+A")
     page.keyboard.type(text)
     page.keyboard.press("Enter")

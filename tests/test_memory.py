@@ -67,7 +67,7 @@ class MallInfo2(ctypes.Structure):
         "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
         "fordblks", "keepcost")]
 
-libc = memory._glibc()
+libc = memory.glibc()
 libc.mallinfo2.restype = MallInfo2
 if sys.argv[1] == "mapped":
     assert memory.map_large_blocks()
@@ -80,7 +80,7 @@ print(libc.mallinfo2().hblkhd - before)
 
 
 @pytest.mark.skipif(
-    memory._glibc() is None or not hasattr(memory._glibc(), "mallinfo2"), reason="glibc only"
+    memory.glibc() is None or not hasattr(memory.glibc(), "mallinfo2"), reason="glibc only"
 )
 def test_large_blocks_keep_mappings_of_their_own_after_a_larger_one_was_freed():
     # glibc's own settings from the environment fix its threshold too (Dask's nanny writes
