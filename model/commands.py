@@ -41,7 +41,7 @@ class Subcommand:
 
 MODEL_SUBCOMMANDS = {
     "study": Subcommand("model.study.cli", "parameter sweeps and Monte-Carlo bands on Dask"),
-    "fe": Subcommand("model.fe.cli", "the elastic–plastic FE check of the section (OpenSeesPy)"),
+    "fe": Subcommand("model.fe.cli", "the elastic–plastic FE check of the section"),
     "band": Subcommand(
         "model.study.band_cli", "Monte-Carlo band of the long-term settlement (p05, p50, p95)"
     ),

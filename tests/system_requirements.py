@@ -41,5 +41,9 @@ def opensees_missing() -> str | None:
     return None if reason is None else f"{reason}; {INSTALL_HINT}"
 
 
+needs_opensees = pytest.mark.skipif(opensees_missing() is not None, reason=opensees_missing() or "")
+"""Mark of the tests that run OpenSeesPy (the ``opensees`` engine of the FE section): skipped,
+with the reason, where it or its libraries are missing."""
+
 needs_chromium = pytest.mark.skipif(chromium_missing() is not None, reason=chromium_missing() or "")
 """Mark of the tests that drive Chromium: skipped, with the reason, where it is missing."""

@@ -1,5 +1,6 @@
-"""OpenSeesPy FE section (docs/model.md §12): gravity stage, elastic FE against the analytical 2D
-model, plastic residuals, inputs refused, missing library, stored results.
+"""The FE section (docs/model.md §12): gravity stage, elastic FE against the analytical 2D
+model, plastic residuals, inputs refused, missing library, stored results. The dynamic tests
+run on the default (native) engine; those marked ``needs_opensees`` run OpenSeesPy.
 
 The dynamic tests load the invert with a Hann pulse (0.4 s in a 1 s record, band 1–4 Hz by the
 5 %/99 % energy rule, shortest S wavelength c₂/f_high = 8.95 m) on coarse meshes, so that the
@@ -14,32 +15,22 @@ import sys
 
 import numpy as np
 import pytest
-from system_requirements import opensees_missing
+from fe_pulses import DT_S, PLASTIC_MESH, hann_pulse
+from system_requirements import needs_opensees
 
-if opensees_missing():  # OpenSeesPy raises RuntimeError without BLAS/LAPACK: no importorskip
-    pytest.skip(opensees_missing(), allow_module_level=True)
-
-from model.fe.analysis import analytical_profile, fe_time_hint, gravity_state, run_fe  # noqa: E402
-from model.fe.build import FEUnavailableError, build_section, opensees  # noqa: E402
-from model.fe.cli import main  # noqa: E402
-from model.fe.inputs import (  # noqa: E402
+from model.fe.analysis import analytical_profile, fe_time_hint, gravity_state, run_fe
+from model.fe.build import FEUnavailableError, build_section, opensees
+from model.fe.cli import main
+from model.fe.inputs import (
     drucker_prager_plane_strain,
     geostatic,
     load_band,
     rayleigh_coefficients,
     resample_load,
 )
-from model.fe.mesh import FEMesh, section_mesh  # noqa: E402
-from model.fe.store import save_fe_result, stored_fe_result  # noqa: E402
-from model.params import Scenario  # noqa: E402
-
-DT_S, PULSE_S = 1e-3, 0.4
-
-
-def hann_pulse(peak_N_per_m: float = 50e3) -> np.ndarray:
-    """Hann pulse of PULSE_S at the invert, then zeros to 1 s (N/m)."""
-    t = np.arange(0.0, 1.0, DT_S)
-    return np.where(t < PULSE_S, peak_N_per_m * np.sin(np.pi * t / PULSE_S) ** 2, 0.0)
+from model.fe.mesh import FEMesh, section_mesh
+from model.fe.store import save_fe_result, stored_fe_result
+from model.params import Scenario
 
 
 # ---- small closed forms -----------------------------------------------------------------------
@@ -95,6 +86,7 @@ def _gravity_errors(law: str, size: float):
     )
 
 
+@needs_opensees
 def test_gravity_stage_gives_the_k0_geostatic_stress():
     """Elastic soil, body force ρg and the geostatic tractions on both arcs: every element holds
     σ_v = ρ g z and σ_h = K0 σ′_v + u (K0 = 1 − sin 25° = 0.577) to the element tolerance.
@@ -109,6 +101,7 @@ def test_gravity_stage_gives_the_k0_geostatic_stress():
     assert all(f < c / 2.5 for f, c in zip(fine, coarse, strict=True))
 
 
+@needs_opensees
 def test_gravity_stage_of_the_plastic_law_carries_the_k0_deviator():
     """Mohr–Coulomb (φ_u = 0) soil carries the geostatic field minus its in-plane mean:
     σ_xx = −σ_yy = (σ_v − σ_h)/2 = (1 − K0) σ′_v / 2, within 0.1 % of γR (measured 0.06 % at
@@ -148,7 +141,6 @@ def test_elastic_fe_agrees_with_the_analytical_model_and_converges():
 
 
 # ---- plastic soil -------------------------------------------------------------------------------
-PLASTIC_MESH = FEMesh(outer_radius=12.0, plastic_radius=8.0)
 
 
 def test_very_strong_soil_leaves_no_residual():
@@ -194,14 +186,20 @@ def test_a_plastic_law_that_never_yields_is_the_elastic_law_step_by_step():
     np.testing.assert_allclose(plastic.disp_m, elastic.disp_m, rtol=0, atol=1e-9 * scale)
 
 
+@needs_opensees
 def test_a_plastic_passage_keeps_the_results_of_the_profile_solver():
     """Regression values (no closed form exists): one 100 kN/m pulse on PLASTIC_MESH with the
-    default soil, pinned from the code before the speed-up of docs/fe_section.md (profile solver,
-    mass in the quads). SuperLU and nodal masses change only the rounding (measured 1e-11 of the
-    values); 1e-7 leaves room for other BLAS builds and is far below any change of the physics
-    (the mesh study's differences are ~1e-3)."""
+    default soil in OpenSees, pinned from the code before the speed-up of docs/fe_section.md
+    (profile solver, mass in the quads; the native engine is held to OpenSees in
+    tests/test_fe_native.py). SuperLU and nodal masses change only the rounding (measured 1e-11
+    of the values); 1e-7 leaves room for other BLAS builds and is far below any change of the
+    physics (the mesh study's differences are ~1e-3)."""
     result = run_fe(
-        Scenario.paper(), "mohr_coulomb", mesh=PLASTIC_MESH, load=(hann_pulse(100e3), DT_S)
+        Scenario.paper(),
+        "mohr_coulomb",
+        mesh=PLASTIC_MESH,
+        load=(hann_pulse(100e3), DT_S),
+        engine="opensees",
     )
     nodes = [0, 3, 7]  # invert, 3.6 m and 9.15 m below it
     np.testing.assert_allclose(result.depth_m[nodes], [0.0, 3.63459213284, 9.15], rtol=1e-9)
@@ -215,6 +213,7 @@ def test_a_plastic_passage_keeps_the_results_of_the_profile_solver():
     )
 
 
+@needs_opensees
 def test_the_soil_mass_on_the_nodes_is_the_density_times_the_mesh_area():
     """The nodal (lumped) soil masses add up to ρ × the area of the half annulus of straight-sided
     quads, ½ (R² − a²) n_θ sin Δθ, which 2 × 2 Gauss points integrate exactly (rounding
@@ -264,10 +263,13 @@ def test_the_run_time_is_announced_before_the_long_stages(tmp_path):
 
 
 def test_fe_time_hint_scales_with_the_work():
-    """The documented paper case gives back its documented CPU times (docs/fe_section.md)."""
-    assert "about 51 s of CPU" in fe_time_hint(8904, 1851, 1, "elastic")
-    assert "about 4 min of CPU" in fe_time_hint(8904, 1851, 1, "mohr_coulomb")
-    assert "about 13 min of CPU" in fe_time_hint(8904, 1851, 3, "mohr_coulomb")
+    """The documented paper case gives back its documented CPU times (docs/fe_section.md), for
+    each engine."""
+    assert "about 11 s of CPU" in fe_time_hint(8904, 1851, 1, "elastic")
+    assert "about 23 s of CPU" in fe_time_hint(8904, 1851, 1, "mohr_coulomb")
+    assert "about 69 s of CPU" in fe_time_hint(8904, 1851, 3, "mohr_coulomb")
+    assert "about 57 s of CPU" in fe_time_hint(8904, 1851, 1, "elastic", "opensees")
+    assert "about 13 min of CPU" in fe_time_hint(8904, 1851, 3, "mohr_coulomb", "opensees")
 
 
 @pytest.mark.parametrize(
@@ -292,8 +294,8 @@ def test_bad_law_and_passages_are_refused():
 
 
 def test_missing_opensees_gives_a_one_line_message(monkeypatch, capsys, tmp_path):
-    """Without an importable openseespy, the library call and the CLI both name the extra and
-    the Debian packages in one line; the CLI exits with 2."""
+    """Without an importable openseespy, the library call and the CLI asked for the OpenSees
+    engine both name the extra and the Debian packages in one line; the CLI exits with 2."""
     monkeypatch.setitem(sys.modules, "openseespy.opensees", None)
     with pytest.raises(FEUnavailableError) as info:
         opensees()
@@ -301,7 +303,7 @@ def test_missing_opensees_gives_a_one_line_message(monkeypatch, capsys, tmp_path
     assert 'pip install ".[fe]"' in message and "libopenblas0" in message
     assert "liblapack3" in message and "\n" not in message
     with pytest.raises(SystemExit) as exit_info:
-        main(["--preset", "paper", "--out", str(tmp_path)])
+        main(["--preset", "paper", "--engine", "opensees", "--out", str(tmp_path)])
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1 and "[fe]" in err

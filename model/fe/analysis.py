@@ -10,6 +10,9 @@
   then a static equilibrium solve with the train gone: for elastic soil it returns exactly to
   the state before the passage, so the displacement left is the permanent (plastic) one. The
   next passage starts from rest.
+- **Engines.** The section is solved by this package (``model.fe.native``, the default: 11 ×
+  faster with Mohr–Coulomb soil) or by OpenSees (``model.fe.build``, the ``fe`` extra): the same
+  model, element by element, held to each other in tests/test_fe_native.py.
 
 Displacements are reported downward positive, relative to the state before the first passage,
 on the nodes below the invert (depth = r − a, below the ring–soil interface as in
@@ -23,17 +26,15 @@ import time
 from collections.abc import Callable
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from model.fe.build import (
     SPRING_NORMAL,
     FEConvergenceError,
-    add_boundary,
-    add_lining,
+    OpenSeesSection,
     apply_gravity,
     build_section,
     opensees,
-    static_equilibrium,
-    transient_analysis,
 )
 from model.fe.inputs import LoadBand, load_band, rayleigh_coefficients, resample_load
 from model.fe.mesh import (
@@ -43,6 +44,7 @@ from model.fe.mesh import (
     check_mesh_size,
     section_mesh,
 )
+from model.fe.native import NativeSection
 from model.fe.store import FEResult
 from model.params import Scenario
 from model.run_cost import machine_load_factor
@@ -50,25 +52,32 @@ from model.run_cost import machine_load_factor
 TAIL_BOUNDARY_TIMES = 1.0
 """Quiet tail after each passage, in units of R/c₂ plus the boundary relaxation time."""
 SOIL_LAWS = ("elastic", "mohr_coulomb")
+SECTION_ENGINES = {"native": NativeSection, "opensees": OpenSeesSection}
+"""Who solves the section: this package (``model.fe.native``, the default) or OpenSees
+(``model.fe.build``); the same model, agreeing to ~1e-7 of the peak (tests/test_fe_native.py)."""
 UNBALANCE_TOLERANCE = 1e-6
 """Plastic soil: a time step has converged when the unbalanced force (N, 2-norm over the model)
 is below this fraction of the peak invert load; one iteration then suffices where the soil
 stays elastic (changes the result by < 1e-6 of it, docs/fe_section.md)."""
 
 FE_CPU_SECONDS_PER_ELEMENT_STEP = {
-    "elastic": 51.0 / (8904 * 1851),
-    "mohr_coulomb": 255.0 / (8904 * 1851),
+    ("native", "elastic"): 11.0 / (8904 * 1851),
+    ("native", "mohr_coulomb"): 23.0 / (8904 * 1851),
+    ("opensees", "elastic"): 57.0 / (8904 * 1851),
+    ("opensees", "mohr_coulomb"): 252.0 / (8904 * 1851),
 }
-"""CPU time per soil element and time step (s), from docs/fe_section.md's speed figures: one
-passage of the paper case on the default mesh (8904 soil elements, 1851 steps) took 51 s with
-the elastic law and 255 s with Mohr–Coulomb (on an idle core) on the 2-core development
-machine. The plastic law's cost grows with the yielding (iterations per step), so the estimate
-is a guide, not a bound."""
+"""CPU time per soil element and time step (s) by (engine, law), from docs/fe_section.md's speed
+figures: one passage of the paper case on the default mesh (8904 soil elements, 1851 steps),
+``python benchmarks/bench_fe.py --engine both`` on the 2-core development machine, idle. The
+plastic law's cost grows with the yielding (iterations per step), so the estimate is a guide,
+not a bound."""
 
 Progress = Callable[[str, float], None]
 
 
-def fe_time_hint(n_elements: int, steps_per_passage: int, passages: int, soil_law: str) -> str:
+def fe_time_hint(
+    n_elements: int, steps_per_passage: int, passages: int, soil_law: str, engine: str = "native"
+) -> str:
     """One line telling how long the gravity and dynamic stages will take, before they start.
 
     Parameters
@@ -80,14 +89,16 @@ def fe_time_hint(n_elements: int, steps_per_passage: int, passages: int, soil_la
     passages : int
         Passages in a row.
     soil_law : {"elastic", "mohr_coulomb"}
+    engine : {"native", "opensees"}
 
     Returns
     -------
     str
-        E.g. "the FE section: 8904 elements × 1851 time steps × 1 passage, about 4 min of CPU
-        time (...)".
+        E.g. "the FE section: 8904 elements × 1851 time steps × 1 passage with the
+        mohr_coulomb law, about 23 s of CPU time (...)".
     """
-    seconds = FE_CPU_SECONDS_PER_ELEMENT_STEP[soil_law] * n_elements * steps_per_passage * passages
+    per_step = FE_CPU_SECONDS_PER_ELEMENT_STEP[engine, soil_law]
+    seconds = per_step * n_elements * steps_per_passage * passages
     load = machine_load_factor()
     busy = f", about {_duration(load * seconds)} at this machine's load" if load > 1.05 else ""
     plural = "s" if passages != 1 else ""
@@ -139,8 +150,9 @@ def run_fe(
     progress: Progress | None = None,
     load: tuple[np.ndarray, float] | None = None,
     announce: Callable[[str], None] | None = None,
+    engine: str = "native",
 ) -> FEResult:
-    """Run the OpenSeesPy plane-strain section under the line-load history at the invert.
+    """Run the plane-strain FE section under the line-load history at the invert.
 
     Parameters
     ----------
@@ -161,6 +173,9 @@ def run_fe(
     announce : callable(str), optional
         Told :func:`fe_time_hint` once the mesh and the time step are known, before the gravity
         and dynamic stages (the long part) start.
+    engine : {"native", "opensees"}
+        Who solves the section (:data:`SECTION_ENGINES`): this package, or OpenSeesPy (the
+        ``fe`` extra). The same model; the results agree to ~1e-7 of the peak.
 
     Returns
     -------
@@ -169,10 +184,12 @@ def run_fe(
     Raises
     ------
     ValueError
-        Unknown law, bad passages, a mesh that cannot resolve the load band or has more than
-        ``MAX_FE_ELEMENTS`` elements.
+        Unknown law, engine or bad passages, a mesh that cannot resolve the load band or has
+        more than ``MAX_FE_ELEMENTS`` elements.
     FEUnavailableError
-        OpenSeesPy missing or its shared library not loadable.
+        The OpenSees engine asked for and OpenSeesPy missing or its shared library not loadable.
+    FEConvergenceError
+        A static stage or a time step did not converge (the message says when).
     """
     if soil_law not in SOIL_LAWS:
         raise ValueError(f"soil_law = {soil_law!r} must be one of {SOIL_LAWS}")
@@ -182,8 +199,11 @@ def run_fe(
     _check_boundary(mesh, scenario.tunnel.ring_radius)
     if mesh.element_size is not None:  # refused before the pipeline run, not after it
         check_mesh_size(scenario.tunnel.ring_radius, mesh.outer_radius, mesh.element_size)
+    if engine not in SECTION_ENGINES:
+        raise ValueError(f"engine = {engine!r} must be one of {tuple(SECTION_ENGINES)}")
     report = progress or (lambda stage, fraction: None)
-    ops = opensees()
+    if engine == "opensees":
+        opensees()  # FEUnavailableError before the pipeline runs
     timings = {}
     start = time.perf_counter()
     report("load", 0.0)
@@ -211,51 +231,18 @@ def run_fe(
     timings["load"] = time.perf_counter() - start
     report("load", 1.0)
     if announce is not None:
-        announce(fe_time_hint(grid.n_rings * grid.n_theta, n_passage, passages, soil_law))
-
-    start = time.perf_counter()
-    report("gravity", 0.0)
-    book = build_section(ops, scenario, grid, soil_law, mesh.plastic_radius)
-    anchor = apply_gravity(ops, scenario, grid, soil_law)
-    ops.remove("element", anchor)
-    add_lining(ops, scenario, grid)
-    add_boundary(ops, scenario, grid)
-    static_equilibrium(ops)
-    timings["gravity"] = time.perf_counter() - start
-    report("gravity", 1.0)
+        announce(fe_time_hint(grid.n_rings * grid.n_theta, n_passage, passages, soil_law, engine))
 
     history = np.concatenate([np.concatenate([q, np.zeros(n_tail)])] * passages)
     a0, a1 = rayleigh_coefficients(soil.shear_loss_factor, band.f_low_hz, band.f_high_hz)
-    ops.timeSeries("Path", 3, "-dt", dt, "-values", *history.tolist(), 0.0)
-    ops.pattern("Plain", 3, 3)
-    ops.load(int(grid.node_tag(0, 0)), 0.0, -0.5)  # half the line load on the half model
-
-    depth_nodes = [int(grid.node_tag(i, 0)) for i in range(grid.n_rings + 1)]
-    reference = np.array([ops.nodeDisp(n, 2) for n in depth_nodes])
-    disp = np.zeros((len(depth_nodes), history.size + 1))
-    residual = np.zeros((passages, len(depth_nodes)))
-    start = time.perf_counter()
-    step = iterations = 0
-    report("dynamic", 0.0)
-    for passage in range(passages):
-        transient_analysis(ops, soil_law, a0, a1, UNBALANCE_TOLERANCE * 0.5 * np.abs(history).max())
-        for _ in range(n_passage):
-            if ops.analyze(1, dt) != 0:
-                raise FEConvergenceError(
-                    f"the dynamic analysis did not converge at t = {(step + 1) * dt:.3f} s"
-                )
-            step += 1
-            iterations += max(ops.testIter(), 1)  # the linear algorithm solves once, reports 0
-            disp[:, step] = reference - np.array([ops.nodeDisp(n, 2) for n in depth_nodes])
-            if step % 50 == 0:
-                report("dynamic", step / history.size)
-        end = (passage + 1) * n_passage * dt
-        ops.setTime(end - 1.5 * dt)  # between two samples of the quiet tail: no train load
-        static_equilibrium(ops)
-        ops.setTime(end)
-        residual[passage] = reference - np.array([ops.nodeDisp(n, 2) for n in depth_nodes])
-    timings["dynamic"] = time.perf_counter() - start
-    report("dynamic", 1.0)
+    section = SECTION_ENGINES[engine](scenario, grid, soil_law, mesh.plastic_radius)
+    # SuperLU's back-substitutions call BLAS on small dense blocks, 2.2 × slower on OpenBLAS'
+    # threads than on one (paper case): one thread while the section runs (process-wide)
+    with threadpool_limits(limits=1, user_api="blas"):
+        disp, residual, iterations = _passages(
+            section, history, dt, passages, (a0, a1), report, timings
+        )
+    section.close()
     peaks = np.array(
         [disp[:, 1 + p * n_passage : 1 + (p + 1) * n_passage].max(axis=1) for p in range(passages)]
     )
@@ -265,18 +252,18 @@ def run_fe(
         "largest_edge_m": grid.largest_edge,
         "n_theta": grid.n_theta,
         "n_rings": grid.n_rings,
-        "n_elements": book["n_elements"],
-        "n_plastic_elements": book["n_plastic"],
+        "n_elements": section.n_elements,
+        "n_plastic_elements": section.n_plastic,
         "n_nodes": (grid.n_rings + 1) * (grid.n_theta + 1),
         "band_hz": [band.f_low_hz, band.f_high_hz],
         "shortest_wavelength_m": band.shortest_wavelength_m,
         "dt_s": dt,
         "steps_per_passage": n_passage,
-        "iterations_per_step": iterations / step,
+        "iterations_per_step": iterations / history.size,
         "rayleigh_a0_per_s": a0,
         "rayleigh_a1_s": a1,
+        "engine": engine,
     }
-    ops.wipe()
     return FEResult(
         soil_law=soil_law,
         passages=passages,
@@ -292,6 +279,52 @@ def run_fe(
         timings_s=timings,
         scenario_json=scenario.to_json(),
     )
+
+
+def _passages(section, history, dt, passages, rayleigh, report, timings):
+    """Gravity, then the passages and a static equilibrium after each, on ``section``.
+
+    Returns
+    -------
+    disp : ndarray
+        (n_rings + 1, steps + 1) downward displacement below the invert (m), from the state
+        before the first passage.
+    residual : ndarray
+        (passages, n_rings + 1) the same at rest after each passage.
+    iterations : int
+        Iterations (solves) over all time steps.
+    """
+    start = time.perf_counter()
+    report("gravity", 0.0)
+    section.prepare()
+    timings["gravity"] = time.perf_counter() - start
+    report("gravity", 1.0)
+    section.set_history(history, dt)
+    reference = section.invert_column_disp()
+    disp = np.zeros((reference.size, history.size + 1))
+    residual = np.zeros((passages, reference.size))
+    start = time.perf_counter()
+    step = iterations = 0
+    report("dynamic", 0.0)
+    for passage in range(passages):
+        section.begin_passage(*rayleigh, UNBALANCE_TOLERANCE * 0.5 * np.abs(history).max())
+        for _ in range(history.size // passages):
+            try:
+                iterations += section.step()
+            except FEConvergenceError as error:
+                raise FEConvergenceError(
+                    f"the dynamic analysis did not converge at t = {(step + 1) * dt:.3f} s "
+                    f"({error})"
+                ) from error
+            step += 1
+            disp[:, step] = reference - section.invert_column_disp()
+            if step % 50 == 0:
+                report("dynamic", step / history.size)
+        section.end_passage()
+        residual[passage] = reference - section.invert_column_disp()
+    timings["dynamic"] = time.perf_counter() - start
+    report("dynamic", 1.0)
+    return disp, residual, iterations
 
 
 def gravity_state(scenario: Scenario, soil_law: str = "elastic", mesh: FEMesh | None = None):

@@ -38,8 +38,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from model.fe.inputs import drucker_prager_plane_strain, geostatic, undrained_strength
@@ -135,6 +133,76 @@ def _stress_field(scenario: Scenario, soil_law: str):
     return sxx, syy, body
 
 
+def plastic_soil(scenario: Scenario, mesh: SectionMesh, soil_law: str, plastic_radius: float):
+    """Which elements are plastic and their von Mises yield stress σ_Y = √3 c_u (Pa).
+
+    Returns
+    -------
+    plastic : ndarray of bool
+        (n_rings, n_theta): with the Mohr–Coulomb law, the elements whose centroid lies within
+        ``plastic_radius`` of the axis and below the ground surface.
+    yield_stress : ndarray
+        (n_rings, n_theta) σ_Y of the φ = 0 Drucker–Prager match (c_u at least 1 Pa).
+    """
+    ele_x, ele_y = mesh.centroids()
+    plastic = (soil_law == "mohr_coulomb") & (np.hypot(ele_x, ele_y) <= plastic_radius)
+    plastic &= ele_y < scenario.tunnel.axis_depth
+    strength = np.maximum(undrained_strength(scenario, ele_y), 1.0)
+    yield_stress = drucker_prager_plane_strain(strength, 0.0)[0]
+    return plastic, yield_stress
+
+
+def gravity_loads(scenario: Scenario, mesh: SectionMesh, soil_law: str) -> np.ndarray:
+    """(n_rings + 1, n_theta + 1, 2) nodal forces of the gravity stage (N): the body force and
+    the geostatic tractions on both arcs (the inner one stands for the soil inside the tunnel)."""
+    sxx, syy, body = _stress_field(scenario, soil_law)
+
+    def traction(x, y, normal):
+        return np.array([sxx(y) * normal[0], syy(y) * normal[1]])
+
+    forces = np.zeros((mesh.n_rings + 1, mesh.n_theta + 1, 2))
+    forces[..., 1] = body_loads(mesh, body)
+    forces[0] += arc_loads(mesh, 0, traction)
+    forces[-1] += arc_loads(mesh, mesh.n_rings, traction)
+    return forces
+
+
+def anchor_stiffness(scenario: Scenario) -> float:
+    """Stiffness of the link holding the bottom axis node during gravity (N/m): 1e3 × E."""
+    return 1e3 * scenario.soil.youngs_modulus
+
+
+def lining_beam(scenario: Scenario):
+    """(A (m²), plane-strain E (Pa), I (m⁴), mass per length (kg/m)) of the lining per metre."""
+    tunnel = scenario.tunnel
+    h = tunnel.thickness
+    e_plane = tunnel.youngs_modulus / (1.0 - tunnel.poisson_ratio**2)
+    return h, e_plane, h**3 / 12.0, tunnel.density * h
+
+
+def boundary_coefficients(scenario: Scenario, mesh: SectionMesh):
+    """The viscous–spring boundary lumped at the nodes of r = R, one row per node j.
+
+    Returns
+    -------
+    springs, dashpots : ndarray
+        (n_theta + 1, 2): normal and tangential stiffness (N/m) and damping (N s/m).
+    radial, tangential : ndarray
+        (n_theta + 1, 2) unit vectors of the two directions.
+    """
+    soil = scenario.soil
+    radius = mesh.radii[-1]
+    d_theta = mesh.thetas[1] - mesh.thetas[0]
+    length = np.full(mesh.n_theta + 1, radius * d_theta)
+    length[[0, -1]] *= 0.5
+    springs = np.outer(length, [SPRING_NORMAL, SPRING_TANGENTIAL]) * soil.shear_modulus / radius
+    dashpots = np.outer(length, [soil.p_wave_speed, soil.s_wave_speed]) * soil.density
+    theta = mesh.thetas
+    radial = np.column_stack([np.sin(theta), -np.cos(theta)])
+    tangential = np.column_stack([np.cos(theta), np.sin(theta)])
+    return springs, dashpots, radial, tangential
+
+
 def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, plastic_radius: float):
     """Soil nodes, materials, quads and the symmetry conditions; returns bookkeeping.
 
@@ -158,18 +226,15 @@ def build_section(ops, scenario: Scenario, mesh: SectionMesh, soil_law: str, pla
 
     shear, bulk = soil.shear_modulus, soil.bulk_modulus
     n_elements = nr * nt
-    ele_x, ele_y = mesh.centroids()
     ops.nDMaterial("ElasticIsotropic", 1, soil.youngs_modulus, soil.poisson_ratio, 0.0)
-    plastic = (soil_law == "mohr_coulomb") & (np.hypot(ele_x, ele_y) <= plastic_radius)
-    plastic &= ele_y < scenario.tunnel.axis_depth
-    strength = undrained_strength(scenario, ele_y)
+    plastic, yield_stress = plastic_soil(scenario, mesh, soil_law, plastic_radius)
     for i in range(nr):
         for j in range(nt):
             tag = 1 + i * nt + j
             mat = 1
             if plastic[i, j]:
                 mat = 1 + tag
-                sigma_y, rho_dp = drucker_prager_plane_strain(max(strength[i, j], 1.0), 0.0)
+                sigma_y = float(yield_stress[i, j])
                 ops.nDMaterial("J2Plasticity", mat, bulk, shear, sigma_y, sigma_y, 0.0, 0.0)
             nodes = [
                 mesh.node_tag(a, b) for a, b in [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
@@ -186,7 +251,6 @@ def add_lining(ops, scenario: Scenario, mesh: SectionMesh) -> None:
     stiff links (``zeroLength``, LINK_STIFFNESS per direction) that measure from the moment they
     are added: the gravity displacement of the soil (up to ~1 m with E = 6 MPa: the strain of the
     whole geostatic state) neither loads nor distorts the ring."""
-    tunnel = scenario.tunnel
     nt = mesh.n_theta
     ops.model("basic", "-ndm", 2, "-ndf", 3)
     beam_base = _next_tag(ops.getNodeTags())
@@ -198,12 +262,11 @@ def add_lining(ops, scenario: Scenario, mesh: SectionMesh) -> None:
     ops.fix(beam_base, 0, 0, 1)
     ops.fix(beam_base + nt, 0, 0, 1)
     ops.geomTransf("Linear", 1)
-    h = tunnel.thickness
-    e_plane = tunnel.youngs_modulus / (1.0 - tunnel.poisson_ratio**2)
+    area, e_plane, inertia, mass = lining_beam(scenario)
     for j in range(nt):
         ops.element(
             "elasticBeamColumn", ele_base + j, beam_base + j, beam_base + j + 1,
-            h, e_plane, h**3 / 12.0, 1, "-mass", tunnel.density * h,
+            area, e_plane, inertia, 1, "-mass", mass,
         )  # fmt: skip
     # zeroLength needs the same dofs at both ends: link the soil to 2-dof twins of the beam nodes
     ops.model("basic", "-ndm", 2, "-ndf", 2)
@@ -220,15 +283,7 @@ def add_lining(ops, scenario: Scenario, mesh: SectionMesh) -> None:
 def apply_gravity(ops, scenario, mesh, soil_law):
     """Static gravity stage: body force and the geostatic tractions on both arcs (the inner one
     stands for the soil inside the tunnel); returns the link element holding the bottom node."""
-    sxx, syy, body = _stress_field(scenario, soil_law)
-
-    def traction(x, y, normal):
-        return np.array([sxx(y) * normal[0], syy(y) * normal[1]])
-
-    forces = np.zeros((mesh.n_rings + 1, mesh.n_theta + 1, 2))
-    forces[..., 1] = body_loads(mesh, body)
-    forces[0] += arc_loads(mesh, 0, traction)
-    forces[-1] += arc_loads(mesh, mesh.n_rings, traction)
+    forces = gravity_loads(scenario, mesh, soil_law)
     ops.timeSeries("Linear", 1)
     ops.pattern("Plain", 1, 1)
     for i in range(mesh.n_rings + 1):
@@ -240,8 +295,7 @@ def apply_gravity(ops, scenario, mesh, soil_law):
     ghost = _next_tag(ops.getNodeTags())
     ops.node(ghost, *ops.nodeCoord(int(mesh.node_tag(mesh.n_rings, 0))))
     ops.fix(ghost, 1, 1)
-    stiffness = 1e3 * scenario.soil.youngs_modulus
-    ops.uniaxialMaterial("Elastic", anchor, stiffness)
+    ops.uniaxialMaterial("Elastic", anchor, anchor_stiffness(scenario))
     ops.element("zeroLength", anchor, ghost, int(mesh.node_tag(mesh.n_rings, 0)), "-mat", anchor,
                 "-dir", 2)  # fmt: skip
     ops.constraints("Penalty", PENALTY, PENALTY)
@@ -265,34 +319,22 @@ def add_boundary(ops, scenario, mesh):
 
     Added after gravity: OpenSees' zeroLength measures its deformation from the node
     displacements at the time it is added, so the springs start unloaded."""
-    soil = scenario.soil
-    radius = mesh.radii[-1]
+    springs, dashpots, radial, tangential = boundary_coefficients(scenario, mesh)
     i = mesh.n_rings
-    d_theta = mesh.thetas[1] - mesh.thetas[0]
     ghost_base = _next_tag(ops.getNodeTags())
     ele_base = _next_tag(ops.getEleTags())
     for j in range(mesh.n_theta + 1):
         node = int(mesh.node_tag(i, j))
-        length = radius * d_theta * (0.5 if j in (0, mesh.n_theta) else 1.0)
         x, y = mesh.xy(i, j)
         ghost = int(ghost_base + j)
         ops.node(ghost, float(x), float(y))
         ops.fix(ghost, 1, 1)
         normal_mat, tangential_mat = 2 * (ele_base + j), 2 * (ele_base + j) + 1
-        ops.uniaxialMaterial(
-            "Elastic", normal_mat, SPRING_NORMAL * soil.shear_modulus / radius * length,
-            soil.density * soil.p_wave_speed * length,
-        )  # fmt: skip
-        ops.uniaxialMaterial(
-            "Elastic", tangential_mat, SPRING_TANGENTIAL * soil.shear_modulus / radius * length,
-            soil.density * soil.s_wave_speed * length,
-        )  # fmt: skip
-        theta = mesh.thetas[j]
-        radial = (math.sin(theta), -math.cos(theta), 0.0)
-        tangential = (math.cos(theta), math.sin(theta), 0.0)
+        for mat, k in ((normal_mat, 0), (tangential_mat, 1)):
+            ops.uniaxialMaterial("Elastic", mat, float(springs[j, k]), float(dashpots[j, k]))
         ops.element(
             "zeroLength", int(ele_base + j), ghost, node, "-mat", normal_mat, tangential_mat,
-            "-dir", 1, 2, "-orient", *radial, *tangential,
+            "-dir", 1, 2, "-orient", *radial[j], 0.0, *tangential[j], 0.0,
         )  # fmt: skip
 
 
@@ -337,3 +379,68 @@ def transient_analysis(ops, soil_law, a0, a1, unbalance_N):
         ops.algorithm("ModifiedNewton", "-factoronce")
     ops.integrator("Newmark", 0.5, 0.25)
     ops.analysis("Transient")
+
+
+class OpenSeesSection:
+    """The section built in OpenSees, with the stages ``run_fe`` calls (the same methods as
+    ``model.fe.native.NativeSection``).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    mesh : SectionMesh
+    soil_law : {"elastic", "mohr_coulomb"}
+    plastic_radius : float
+        Plastic elements within this radius of the axis (m).
+    """
+
+    def __init__(self, scenario: Scenario, mesh: SectionMesh, soil_law: str, plastic_radius: float):
+        self.ops = opensees()
+        self.scenario, self.mesh, self.soil_law = scenario, mesh, soil_law
+        book = build_section(self.ops, scenario, mesh, soil_law, plastic_radius)
+        self.n_elements, self.n_plastic = book["n_elements"], book["n_plastic"]
+
+    def prepare(self) -> None:
+        """Gravity, then the anchor removed, the lining and the boundary added and the section
+        brought to rest in equilibrium."""
+        ops = self.ops
+        anchor = apply_gravity(ops, self.scenario, self.mesh, self.soil_law)
+        ops.remove("element", anchor)
+        add_lining(ops, self.scenario, self.mesh)
+        add_boundary(ops, self.scenario, self.mesh)
+        static_equilibrium(ops)
+
+    def set_history(self, history: np.ndarray, dt: float) -> None:
+        """The line load (N/m) of the time steps to come, at ``dt`` (s): a ``Path`` series,
+        half of it downward at the invert."""
+        self.dt, self.steps = dt, 0
+        self.ops.timeSeries("Path", 3, "-dt", dt, "-values", *np.asarray(history).tolist(), 0.0)
+        self.ops.pattern("Plain", 3, 3)
+        self.ops.load(int(self.mesh.node_tag(0, 0)), 0.0, -0.5)
+
+    def begin_passage(self, a0: float, a1: float, unbalance_N: float) -> None:
+        """The transient analysis of :func:`transient_analysis`."""
+        transient_analysis(self.ops, self.soil_law, a0, a1, unbalance_N)
+
+    def step(self) -> int:
+        """One time step; the iterations taken (FEConvergenceError if it fails)."""
+        if self.ops.analyze(1, self.dt) != 0:
+            raise FEConvergenceError("OpenSees' analysis failed")
+        self.steps += 1
+        return max(self.ops.testIter(), 1)  # the linear algorithm solves once, reports 0
+
+    def end_passage(self) -> None:
+        """Static equilibrium between two samples of the quiet tail (no train load)."""
+        end = self.steps * self.dt
+        self.ops.setTime(end - 1.5 * self.dt)
+        static_equilibrium(self.ops)
+        self.ops.setTime(end)
+
+    def invert_column_disp(self) -> np.ndarray:
+        """Vertical displacement (m, up +) of the soil nodes below the invert, ring by ring."""
+        nodes = self.mesh.node_tag(np.arange(self.mesh.n_rings + 1), 0)
+        return np.array([self.ops.nodeDisp(int(n), 2) for n in nodes])
+
+    def close(self) -> None:
+        """Wipe the OpenSees domain."""
+        self.ops.wipe()

@@ -26,12 +26,14 @@ ELEMENTS_PER_WAVELENGTH = 6
 STEPS_PER_PERIOD = 20
 """FE time steps per period of f_hi (Newmark period elongation ≈ 0.8 %)."""
 
-FE_BYTES_PER_ELEMENT = 9e3
-"""Peak memory per soil element of the OpenSees section (B): the growth of ru_maxrss between
-meshes of 12 474 and 49 387 elements (paper scenario, elastic gravity stage, element sizes 0.5
-and 0.25 m to R = 30 m: 108 and 427 MB above the interpreter's 162 MB)."""
+FE_BYTES_PER_ELEMENT = 11e3
+"""Peak memory per soil element of the FE section (B), the larger of the two engines': the
+native engine's peak ru_maxrss above the start, Mohr–Coulomb law, up to its first time step
+(paper scenario, element sizes 0.5 and 0.25 m to R = 30 m: 154 MB for 12 474 elements and
+548 MB for 49 387, 11.1 kB each; most of it SuperLU's factors, 29 M entries at 49 387
+elements); OpenSees' growth over the same meshes was 9 kB per element (108 and 427 MB)."""
 MAX_FE_ELEMENTS = 200_000
-"""Most soil elements of an FE section: about 1.8 GB at :data:`FE_BYTES_PER_ELEMENT` (a 0.15 m
+"""Most soil elements of an FE section: about 2.2 GB at :data:`FE_BYTES_PER_ELEMENT` (a 0.15 m
 mesh to R = 30 m has 137 122)."""
 
 
@@ -189,22 +191,24 @@ def arc_loads(mesh: SectionMesh, i: int, traction):
 
 
 def body_loads(mesh: SectionMesh, body_force_y):
-    """Consistent nodal forces (i, j) of a vertical body force b(y) (N/m³) on bilinear quads."""
-    forces = np.zeros((mesh.n_rings + 1, mesh.n_theta + 1))
+    """Consistent nodal forces (i, j) of a vertical body force b(y) (N/m³) on bilinear quads:
+    Σ N_a b(y) |J| over each quad's 2 × 2 Gauss points."""
+    nr, nt = mesh.n_rings, mesh.n_theta
+    i, j = np.meshgrid(np.arange(nr), np.arange(nt), indexing="ij")
+    corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
+    x = np.stack([mesh.xy(a, b)[0] for a, b in corners], axis=-1)  # (nr, nt, 4)
+    y = np.stack([mesh.xy(a, b)[1] for a, b in corners], axis=-1)
+    forces = np.zeros((nr + 1, nt + 1))
     gauss = np.array([-1.0, 1.0]) / math.sqrt(3.0)
-    for i in range(mesh.n_rings):
-        for j in range(mesh.n_theta):
-            corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
-            xy = np.array([mesh.xy(a, b) for a, b in corners])
-            for s in gauss:
-                for t in gauss:
-                    shape = 0.25 * np.array(
-                        [(1 - s) * (1 - t), (1 + s) * (1 - t), (1 + s) * (1 + t), (1 - s) * (1 + t)]
-                    )
-                    ds = 0.25 * np.array([-(1 - t), (1 - t), (1 + t), -(1 + t)])
-                    dt = 0.25 * np.array([-(1 - s), -(1 + s), (1 + s), (1 - s)])
-                    jac = abs((ds @ xy[:, 0]) * (dt @ xy[:, 1]) - (ds @ xy[:, 1]) * (dt @ xy[:, 0]))
-                    b = body_force_y(shape @ xy[:, 1])
-                    for (a, c), n in zip(corners, shape, strict=True):
-                        forces[a, c] += n * b * jac
+    for s in gauss:
+        for t in gauss:
+            shape = 0.25 * np.array(
+                [(1 - s) * (1 - t), (1 + s) * (1 - t), (1 + s) * (1 + t), (1 - s) * (1 + t)]
+            )
+            ds = 0.25 * np.array([-(1 - t), (1 - t), (1 + t), -(1 + t)])
+            dt = 0.25 * np.array([-(1 - s), -(1 + s), (1 + s), (1 - s)])
+            jac = np.abs((x @ ds) * (y @ dt) - (y @ ds) * (x @ dt))
+            load = body_force_y(y @ shape) * jac
+            for (a, b), n in zip(corners, shape, strict=True):
+                np.add.at(forces, (a, b), n * load)
     return forces
