@@ -18,7 +18,7 @@ from system_requirements import needs_opensees
 from model.fe.analysis import run_fe
 from model.fe.mesh import FEMesh, section_mesh
 from model.fe.native import (
-    _beam_matrices,
+    beam_matrices,
     elastic_matrix,
     plastic_forces,
     quad_kinematics,
@@ -94,14 +94,14 @@ def test_beams_carry_no_force_in_a_rigid_motion_and_match_the_cantilever():
     one element clamped at its first node deflects P L³ / (3 E I) under a tip load P."""
     angles = np.linspace(0.0, math.pi, 9)
     xy = np.column_stack([3.0 * np.sin(angles), -3.0 * np.cos(angles)])
-    stiffness, length = _beam_matrices(xy, 0.3, 3e10, 0.3**3 / 12)
+    stiffness, length = beam_matrices(xy, 0.3, 3e10, 0.3**3 / 12)
     rotation = 1e-3
     for k in range(len(length)):
         motion = np.concatenate([[-rotation * y, rotation * x, rotation] for x, y in xy[k : k + 2]])
         scale = np.abs(stiffness[k]).max() * np.abs(motion).max()
         np.testing.assert_allclose(stiffness[k] @ motion, 0.0, atol=1e-9 * scale)
     inertia, youngs, span = 0.3**3 / 12, 3e10, 2.0
-    single, _ = _beam_matrices(np.array([[0.0, 0.0], [span, 0.0]]), 0.3, youngs, inertia)
+    single, _ = beam_matrices(np.array([[0.0, 0.0], [span, 0.0]]), 0.3, youngs, inertia)
     tip = np.linalg.solve(single[0][3:, 3:], [0.0, 1e3, 0.0])
     assert tip[1] == pytest.approx(1e3 * span**3 / (3 * youngs * inertia), rel=1e-12)
 

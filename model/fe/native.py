@@ -126,9 +126,10 @@ def _assemble(dofs: np.ndarray, blocks: np.ndarray, size: int) -> sp.csr_matrix:
     return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(size, size))
 
 
-def _beam_matrices(xy: np.ndarray, area: float, youngs: float, inertia: float):
-    """Global stiffness (n, 6, 6) of 2D elastic beams between consecutive points of ``xy``
-    (OpenSees ``elasticBeamColumn`` with a linear transformation)."""
+def beam_matrices(xy: np.ndarray, area: float, youngs: float, inertia: float):
+    """2D elastic beams between consecutive points of ``xy`` (OpenSees ``elasticBeamColumn``
+    with a linear transformation): their global stiffness matrices (n, 6, 6; u_x, u_y, θ of
+    both ends) and lengths (n,) (m)."""
     dx, dy = np.diff(xy[:, 0]), np.diff(xy[:, 1])
     length = np.hypot(dx, dy)
     c, s = dx / length, dy / length
@@ -293,7 +294,7 @@ class NativeSection:
         nt = self.mesh.n_theta
         area, youngs, inertia, mass_per_length = lining_beam(self.scenario)
         ring = np.column_stack(self.mesh.xy(0, np.arange(nt + 1)))
-        beam_k, length = _beam_matrices(ring, area, youngs, inertia)
+        beam_k, length = beam_matrices(ring, area, youngs, inertia)
         beam_dofs = self.n_soil + 3 * np.arange(nt)[:, None] + np.arange(6)[None, :]
         self.beams = _assemble(beam_dofs, beam_k, self.size)
         node_mass = np.zeros(nt + 1)
