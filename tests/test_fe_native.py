@@ -18,6 +18,7 @@ from system_requirements import needs_opensees
 from model.fe.analysis import run_fe
 from model.fe.mesh import FEMesh, section_mesh
 from model.fe.native import (
+    NO_TANGENT,
     beam_matrices,
     elastic_matrix,
     plastic_forces,
@@ -59,12 +60,13 @@ def test_quads_strain_a_linear_field_exactly_and_integrate_the_area():
     assert weight.sum() == pytest.approx(area, rel=1e-12)
 
 
-def _forces(grid, dofs, strain_matrix, weight, u, yield_stress):
-    """Internal forces of every quad made plastic with ``yield_stress`` (N)."""
+def _forces(dofs, strain_matrix, weight, u, yield_stress, tangent=NO_TANGENT):
+    """Internal forces of every quad made plastic with ``yield_stress`` (N), from no plastic
+    strain; with ``tangent`` ((n, 8, 8)), their tangent stiffness is written there."""
     n = dofs.shape[0]
     force = np.zeros(u.size)
     plastic_forces(u, dofs, strain_matrix, weight, np.full(n, yield_stress), BULK, SHEAR,
-                   np.zeros((n, 4, 4)), np.zeros((n, 4, 4)), force)  # fmt: skip
+                   np.zeros((n, 4, 4)), np.zeros((n, 4, 4)), force, tangent)  # fmt: skip
     return force
 
 
@@ -81,12 +83,34 @@ def test_plastic_quads_are_elastic_below_yield_and_carry_c_u_in_yielding_simple_
     elastic = np.zeros(u.size)
     blocks = np.einsum("egia,ij,egjb,eg->eab", strain_matrix, d_matrix, strain_matrix, weight)
     np.add.at(elastic, dofs, np.einsum("eab,eb->ea", blocks, u[dofs]))
-    strong = _forces(grid, dofs, strain_matrix, weight, u, 1e12)
+    strong = _forces(dofs, strain_matrix, weight, u, 1e12)
     np.testing.assert_allclose(strong, elastic, rtol=0, atol=1e-9 * np.abs(elastic).max())
     c_u = 0.25 * SHEAR * shear_strain
-    weak = _forces(grid, dofs, strain_matrix, weight, u, math.sqrt(3.0) * c_u)
+    weak = _forces(dofs, strain_matrix, weight, u, math.sqrt(3.0) * c_u)
     ratio = c_u / (SHEAR * shear_strain)
     np.testing.assert_allclose(weak, ratio * elastic, rtol=0, atol=1e-7 * np.abs(weak).max())
+
+
+@pytest.mark.parametrize("yield_stress", [1e12, 2e3], ids=["elastic", "yielding"])
+def test_the_tangent_of_the_plastic_quads_is_the_derivative_of_their_forces(yield_stress):
+    """OpenSees' consistent tangent of the J2 return (used by the static stages and as the
+    passage's iteration matrix) is the derivative of the nodal forces: a central difference
+    of the forces along a random direction, at a strain state that yields everywhere with
+    σ_Y = 2 kPa, agrees with the tangent times that direction to 1e-6 of it (the difference's
+    own error is ~1e-9 there; the return's γ(1 − 1e-8) leaves ~1e-8)."""
+    grid, dofs, strain_matrix, weight = _patch()
+    u = _nodal_field(grid, ((1e-3, 2e-3), (-5e-4, 3e-3)))
+    direction = np.random.default_rng(1).standard_normal(u.size) * 1e-6
+    tangents = np.empty((dofs.shape[0], 8, 8))
+    _forces(dofs, strain_matrix, weight, u, yield_stress, tangents)
+    product = np.zeros(u.size)
+    np.add.at(product, dofs, np.einsum("eab,eb->ea", tangents, direction[dofs]))
+    step = 1e-3
+    difference = (
+        _forces(dofs, strain_matrix, weight, u + step * direction, yield_stress)
+        - _forces(dofs, strain_matrix, weight, u - step * direction, yield_stress)
+    ) / (2 * step)
+    np.testing.assert_allclose(difference, product, rtol=0, atol=1e-6 * np.abs(product).max())
 
 
 def test_beams_carry_no_force_in_a_rigid_motion_and_match_the_cantilever():
@@ -106,32 +130,43 @@ def test_beams_carry_no_force_in_a_rigid_motion_and_match_the_cantilever():
     assert tip[1] == pytest.approx(1e3 * span**3 / (3 * youngs * inertia), rel=1e-12)
 
 
+CASES = {
+    "elastic": ("elastic", None),
+    "mohr_coulomb": ("mohr_coulomb", None),
+    "mohr_coulomb, c_u 5 kPa": ("mohr_coulomb", 5e3),
+}
+"""Soil law and undrained strength (Pa; None: the paper's c_u = cu_ratio σ′_v0)."""
+
+
 @pytest.fixture(scope="module")
 def both_engines():
-    """Two passages of the 100 kN/m pulse on PLASTIC_MESH with each law and each engine."""
-    return {
-        (law, engine): run_fe(
-            Scenario.paper(),
-            law,
-            passages=2,
-            mesh=PLASTIC_MESH,
-            load=(hann_pulse(100e3), DT_S),
-            engine=engine,
-        )
-        for law in ("elastic", "mohr_coulomb")
-        for engine in ("native", "opensees")
-    }
+    """Two passages of the 100 kN/m pulse on PLASTIC_MESH for each case, on each engine."""
+    results = {}
+    for case, (law, strength) in CASES.items():
+        scenario = Scenario.paper()
+        scenario.site.layers[0].undrained_strength = strength
+        for engine in ("native", "opensees"):
+            results[case, engine] = run_fe(
+                scenario,
+                law,
+                passages=2,
+                mesh=PLASTIC_MESH,
+                load=(hann_pulse(100e3), DT_S),
+                engine=engine,
+            )
+    return results
 
 
 @needs_opensees
-@pytest.mark.parametrize("law", ["elastic", "mohr_coulomb"])
-def test_the_native_section_is_the_opensees_section(both_engines, law):
+@pytest.mark.parametrize("case", list(CASES))
+def test_the_native_section_is_the_opensees_section(both_engines, case):
     """The same model solved here and by OpenSees: every displacement history below the invert
     and the permanent displacement after each passage agree to 1e-6 of the invert peak
-    (measured 1.4e-7 and 6e-8: OpenSees holds the fixed degrees of freedom by penalty springs
-    of 1e14 N/m, the native section removes them, and its static stages iterate on the initial
-    stiffness), and the plastic law needs the same iterations per step within 2 %."""
-    native, reference = both_engines[law, "native"], both_engines[law, "opensees"]
+    (measured 1.4e-7, and 2.4e-7 for the weak soil, which yields already in the gravity stage:
+    OpenSees holds the fixed degrees of freedom by penalty springs of 1e14 N/m, the native
+    section removes them), with the same iterations per step within 10 % (measured 0.2 % and
+    6 %: the iterations stop at a tolerance, where the rounding differs)."""
+    native, reference = both_engines[case, "native"], both_engines[case, "opensees"]
     scale = reference.peak_disp_m[0]
     np.testing.assert_allclose(native.disp_m, reference.disp_m, rtol=0, atol=1e-6 * scale)
     np.testing.assert_allclose(
@@ -139,9 +174,9 @@ def test_the_native_section_is_the_opensees_section(both_engines, law):
     )
     assert native.mesh["n_plastic_elements"] == reference.mesh["n_plastic_elements"]
     assert native.mesh["iterations_per_step"] == pytest.approx(
-        reference.mesh["iterations_per_step"], rel=0.02
+        reference.mesh["iterations_per_step"], rel=0.1
     )
-    if law == "mohr_coulomb":  # the comparison means something: the soil yields
+    if CASES[case][0] == "mohr_coulomb":  # the comparison means something: the soil yields
         assert native.residual_per_passage_m[1, 0] > native.residual_per_passage_m[0, 0] > 1e-4
 
 

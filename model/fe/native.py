@@ -14,14 +14,14 @@ The same model, element by element, as ``model.fe.build`` builds in OpenSees (do
 - Rayleigh damping a₀M + a₁K_init on the nodal masses, the quads and the beams;
 - the same stages: gravity with the anchor (10 load steps for the plastic law), the lining and
   the boundary measuring from the gravity state, a static equilibrium, then each passage with
-  Newmark's average acceleration, the iteration on the once-factorised initial stiffness with
-  the same convergence test (``NormDispOrUnbalance``), and a static equilibrium after it.
+  Newmark's average acceleration, the iteration on the tangent of the passage's start,
+  factorised once, with the same convergence test (``NormDispOrUnbalance``), and a static
+  equilibrium after it; the static stages by Newton's method on J2's consistent tangent.
 
 What differs from OpenSees: the fixed degrees of freedom are removed instead of held by penalty
-springs of 10¹⁴ N/m (which let them move by ~10⁻⁹ m under their reactions), and the static
-stages iterate on the initial stiffness, to a tighter tolerance, instead of Newton's tangent;
-the converged states are the same. Measured against OpenSees on the tests' meshes: the
-histories agree to ~10⁻⁷ of the peak (tests/test_fe_native.py).
+springs of 10¹⁴ N/m (which let them move by ~10⁻⁹ m under their reactions). Measured against
+OpenSees on the tests' meshes: the histories agree to ~10⁻⁷ of the peak
+(tests/test_fe_native.py).
 
 Why: a passage of the paper case with Mohr–Coulomb soil spends most of its time in OpenSees'
 per-element updates (docs/fe_section.md, Speed); here the elastic elements are one sparse
@@ -52,12 +52,13 @@ from model.fe.mesh import SectionMesh, body_loads
 from model.params import Scenario
 
 GAUSS = np.array([-1.0, 1.0]) / math.sqrt(3.0)
-STATIC_TOLERANCE = 1e-12
-"""Static stages: converged when the displacement correction (m, 2-norm) is below this (OpenSees'
-Newton stops at 10⁻⁹ m in the gravity stage and 10⁻¹⁰ m after a passage; the initial-stiffness
-iteration converges linearly, so it goes further)."""
+STATIC_TOLERANCE = 1e-10
+"""Static stages: converged when Newton's displacement correction (m, 2-norm) is below this
+(OpenSees' test: 10⁻⁹ m in the gravity stage, 10⁻¹⁰ m in the static equilibrium)."""
 MAX_ITERATIONS = 100
-"""Most iterations of a time step (as OpenSees' test) and, × 10, of a static stage."""
+"""Most iterations of a time step or a static stage (as OpenSees' tests)."""
+NO_TANGENT = np.empty((0, 8, 8))
+"""``plastic_forces``' tangent argument when none is wanted."""
 GRAVITY_STEPS_PLASTIC = 10
 """Load steps of the plastic law's gravity stage (as ``model.fe.build.apply_gravity``)."""
 
@@ -153,13 +154,15 @@ def beam_matrices(xy: np.ndarray, area: float, youngs: float, inertia: float):
 # ---- the plastic soil -------------------------------------------------------------------------
 @nb.njit(cache=True, nogil=True)
 def plastic_forces(
-    u, dofs, strain_matrix, weight, yield_stress, bulk, shear, plastic_n, plastic, force
+    u, dofs, strain_matrix, weight, yield_stress, bulk, shear, plastic_n, plastic, force, tangent
 ):
     """Add the plastic quads' internal forces at displacement ``u`` to ``force``.
 
     J2 plasticity as OpenSees' ``J2Plasticity`` (perfectly plastic, no viscosity): trial
-    deviator 2G(e − ε_p,n) from the committed plastic strain, radial return to ‖s‖ = √(2/3) σ_Y
-    with the consistency parameter γ = (‖s‖ − √(2/3) σ_Y)/(2G) × (1 − 10⁻⁸).
+    deviator 2G(e − ε_p,n) from the committed plastic strain; where ‖s‖ exceeds √(2/3) σ_Y,
+    radial return with the consistency parameter γ = (‖s‖ − √(2/3) σ_Y)/(2G) × (1 − 10⁻⁸), and
+    OpenSees' consistent tangent K 1⊗1 + (2G + c₃) I_dev + (c₂ − c₃) n⊗n, c₂ = −2G,
+    c₃ = −4G²γ/‖s‖.
 
     Parameters
     ----------
@@ -177,12 +180,25 @@ def plastic_forces(
         (n, 4, 4) out: the trial plastic strain of this state.
     force : ndarray
         Global internal forces (N), added to.
+    tangent : ndarray
+        (n, 8, 8) out: each quad's tangent stiffness (N/m), or an empty (0, 8, 8) array for
+        none.
+
+    Returns
+    -------
+    int
+        Gauss points that yield in this state.
     """
     root23 = math.sqrt(2.0 / 3.0)
     ue = np.empty(8)
+    d = np.empty((3, 3))
+    with_tangent = tangent.shape[0] > 0
+    yielding = 0
     for e in range(dofs.shape[0]):
         for a in range(8):
             ue[a] = u[dofs[e, a]]
+        if with_tangent:
+            tangent[e] = 0.0
         radius = root23 * yield_stress[e]
         for g in range(4):
             exx = eyy = gxy = 0.0
@@ -200,15 +216,20 @@ def plastic_forces(
             phi = norm - radius
             for k in range(4):
                 plastic[e, g, k] = plastic_n[e, g, k]
+            c2 = c3 = n0 = n1 = n3 = 0.0
             if phi > 0.0:
+                yielding += 1
                 gamma = phi / (2.0 * shear) * (1.0 - 1e-8)
-                plastic[e, g, 0] += gamma * s0 / norm
-                plastic[e, g, 1] += gamma * s1 / norm
+                n0, n1, n3 = s0 / norm, s1 / norm, s3 / norm
+                plastic[e, g, 0] += gamma * n0
+                plastic[e, g, 1] += gamma * n1
                 plastic[e, g, 2] += gamma * s2 / norm
-                plastic[e, g, 3] += gamma * s3 / norm
+                plastic[e, g, 3] += gamma * n3
                 s0 = 2.0 * shear * (dev[0] - plastic[e, g, 0])
                 s1 = 2.0 * shear * (dev[1] - plastic[e, g, 1])
                 s3 = 2.0 * shear * (dev[3] - plastic[e, g, 3])
+                c2 = -2.0 * shear
+                c3 = -4.0 * shear * shear * gamma / norm
             sxx = s0 + bulk * trace
             syy = s1 + bulk * trace
             w = weight[e, g]
@@ -218,6 +239,24 @@ def plastic_forces(
                     + strain_matrix[e, g, 1, a] * syy
                     + strain_matrix[e, g, 2, a] * s3
                 )
+            if not with_tangent:
+                continue
+            mu2, coupled = 2.0 * shear + c3, c2 - c3
+            d[0, 0] = bulk + mu2 * 2.0 / 3.0 + coupled * n0 * n0
+            d[1, 1] = bulk + mu2 * 2.0 / 3.0 + coupled * n1 * n1
+            d[0, 1] = d[1, 0] = bulk - mu2 / 3.0 + coupled * n0 * n1
+            d[2, 2] = 0.5 * mu2 + coupled * n3 * n3
+            d[0, 2] = d[2, 0] = coupled * n0 * n3
+            d[1, 2] = d[2, 1] = coupled * n1 * n3
+            for a in range(8):
+                for i in range(3):
+                    bd = 0.0
+                    for j in range(3):
+                        bd += strain_matrix[e, g, j, a] * d[j, i]
+                    bd *= w
+                    for b in range(8):
+                        tangent[e, a, b] += bd * strain_matrix[e, g, i, b]
+    return yielding
 
 
 # ---- the section ------------------------------------------------------------------------------
@@ -324,41 +363,69 @@ class NativeSection:
         self.attached = (self.links + _assemble(outer, spring_k, self.size)).tocsr()
 
     # ---- forces -------------------------------------------------------------------------------
-    def internal_force(self, u: np.ndarray, with_lining: bool = True) -> np.ndarray:
-        """Internal forces at ``u`` (N); the plastic points' trial state is left in
-        ``plastic_trial``."""
+    def internal_force(
+        self, u: np.ndarray, with_lining: bool = True, tangent: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Internal forces at ``u`` (N).
+
+        The plastic points' trial state is left in ``plastic_trial`` and the number of those
+        that yield in ``yielding``; with ``tangent`` ((n_plastic, 8, 8)), the plastic quads'
+        tangent stiffness at ``u`` is written there.
+        """
         force = self.elastic_soil @ u
         if with_lining:
             force += self.beams @ u + self.attached @ (u - self.attached_at)
         else:
             force[self.anchor_dof] += self.anchor * u[self.anchor_dof]
+        self.yielding = 0
         if self.n_plastic:
-            plastic_forces(u, self.plastic_dofs, self.plastic_b, self.plastic_w,
-                           self.plastic_yield, self.bulk, self.shear, self.plastic_n,
-                           self.plastic_trial, force)  # fmt: skip
+            self.yielding = plastic_forces(
+                u, self.plastic_dofs, self.plastic_b, self.plastic_w, self.plastic_yield,
+                self.bulk, self.shear, self.plastic_n, self.plastic_trial, force,
+                NO_TANGENT if tangent is None else tangent,
+            )  # fmt: skip
         return force
 
+    def _stiffness(self, with_lining: bool, plastic: sp.spmatrix) -> sp.csr_matrix:
+        """The section's stiffness with the plastic quads' part ``plastic``: the soil and the
+        anchor during gravity, the soil, the lining and the boundary after it."""
+        matrix = self.elastic_soil + plastic
+        if with_lining:
+            return (matrix + self.beams + self.attached).tocsr()
+        anchor = ([self.anchor], ([self.anchor_dof], [self.anchor_dof]))
+        return (matrix + sp.csr_matrix(anchor, shape=matrix.shape)).tocsr()
+
+    def _tangent(self, tangents: np.ndarray) -> sp.csr_matrix:
+        """The plastic quads' tangent stiffness (:meth:`internal_force` with ``tangent``)."""
+        return _assemble(self.plastic_dofs, tangents, self.size)
+
     def _static_solve(self, load: np.ndarray, with_lining: bool) -> None:
-        """Equilibrium under ``load`` from the current state (velocities zero), iterating on the
-        initial stiffness (factorised once per configuration); commits the plastic state."""
+        """Equilibrium under ``load`` from the current state (velocities zero) by Newton's
+        method on the consistent tangent, as OpenSees' static stages; while no point yields
+        the tangent is the initial stiffness, factorised once per configuration. Commits the
+        plastic state."""
         free = self.free if with_lining else self.gravity_free
-        if with_lining not in self._static_factors:
-            matrix = self.elastic_soil + self.plastic_initial
-            if with_lining:
-                matrix = matrix + self.beams + self.attached
+        tangents = np.empty((self.n_plastic, 8, 8))
+        for _ in range(MAX_ITERATIONS):
+            residual = load - self.internal_force(self.u, with_lining, tangents)
+            if self.yielding:
+                matrix = self._stiffness(with_lining, self._tangent(tangents))
+                lu = factorise(matrix[free][:, free])
             else:
-                anchor = ([self.anchor], ([self.anchor_dof], [self.anchor_dof]))
-                matrix = matrix + sp.csr_matrix(anchor, shape=matrix.shape)
-            self._static_factors[with_lining] = factorise(matrix.tocsr()[free][:, free])
-        lu = self._static_factors[with_lining]
-        for _ in range(10 * MAX_ITERATIONS):
-            residual = load - self.internal_force(self.u, with_lining)
+                if with_lining not in self._static_factors:
+                    matrix = self._stiffness(with_lining, self.plastic_initial)
+                    self._static_factors[with_lining] = factorise(matrix[free][:, free])
+                lu = self._static_factors[with_lining]
             correction = lu.solve(residual[free])
             self.u[free] += correction
             if np.linalg.norm(correction) < STATIC_TOLERANCE:
                 break
         else:
-            raise FEConvergenceError("a static stage of the FE section did not converge")
+            stage = "static equilibrium" if with_lining else "gravity stage"
+            raise FEConvergenceError(
+                f"the {stage} did not converge in {MAX_ITERATIONS} Newton iterations"
+                + ("" if with_lining else " (soil too weak for its K0 state?)")
+            )
         self.internal_force(self.u, with_lining)
         self.plastic_n[:] = self.plastic_trial
 
@@ -392,11 +459,15 @@ class NativeSection:
         stiffness is factorised once for the passage."""
         dt = self.dt
         self._static_factors.clear()  # memory: one set of factors at a time (refactorised after)
-        stiffness = self.elastic_soil + self.plastic_initial + self.beams
-        self.damping = (a1 * stiffness + self.boundary_c + sp.diags(a0 * self.mass)).tocsr()
-        effective = stiffness + self.attached + (2.0 / dt) * self.damping
-        effective = (effective + sp.diags(4.0 / dt**2 * self.mass)).tocsr()
-        self.lu = factorise(effective[self.free][:, self.free])
+        initial = self.elastic_soil + self.plastic_initial + self.beams
+        self.damping = (a1 * initial + self.boundary_c + sp.diags(a0 * self.mass)).tocsr()
+        # the iteration matrix: the tangent at the passage's start (where the soil has just
+        # yielded, OpenSees' J2 state lies 1e-8 outside the surface: its elastoplastic tangent)
+        tangents = np.empty((self.n_plastic, 8, 8))
+        self.internal_force(self.u, True, tangents)
+        tangent = self._stiffness(True, self._tangent(tangents))
+        effective = tangent + (2.0 / dt) * self.damping + sp.diags(4.0 / dt**2 * self.mass)
+        self.lu = factorise(effective.tocsr()[self.free][:, self.free])
         self.velocity = np.zeros(self.size)
         self.acceleration = np.zeros(self.size)
         self.unbalance_N = unbalance_N
@@ -405,7 +476,8 @@ class NativeSection:
         """Advance one time step; returns the iterations taken.
 
         Elastic law: one solve on the factorised effective stiffness (exact). Plastic law:
-        iterations on that matrix (the initial stiffness) until the displacement correction is
+        iterations on that matrix (the passage's first tangent) until the displacement
+        correction is
         below DISP_TOLERANCE or the unbalanced force below the passage's tolerance (2-norms),
         as OpenSees' ``ModifiedNewton`` with ``NormDispOrUnbalance``; FEConvergenceError after
         MAX_ITERATIONS.
