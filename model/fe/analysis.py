@@ -238,11 +238,13 @@ def run_fe(
     section = SECTION_ENGINES[engine](scenario, grid, soil_law, mesh.plastic_radius)
     # SuperLU's back-substitutions call BLAS on small dense blocks, 2.2 × slower on OpenBLAS'
     # threads than on one (paper case): one thread while the section runs (process-wide)
-    with threadpool_limits(limits=1, user_api="blas"):
-        disp, residual, iterations = _passages(
-            section, history, dt, passages, (a0, a1), report, timings
-        )
-    section.close()
+    try:
+        with threadpool_limits(limits=1, user_api="blas"):
+            disp, residual, iterations = _passages(
+                section, history, dt, passages, (a0, a1), report, timings
+            )
+    finally:
+        section.close()  # also after a stage that failed (OpenSees' domain is wiped)
     peaks = np.array(
         [disp[:, 1 + p * n_passage : 1 + (p + 1) * n_passage].max(axis=1) for p in range(passages)]
     )

@@ -26,14 +26,15 @@ ELEMENTS_PER_WAVELENGTH = 6
 STEPS_PER_PERIOD = 20
 """FE time steps per period of f_hi (Newmark period elongation ≈ 0.8 %)."""
 
-FE_BYTES_PER_ELEMENT = 11e3
+FE_BYTES_PER_ELEMENT = 15e3
 """Peak memory per soil element of the FE section (B), the larger of the two engines': the
 native engine's peak ru_maxrss above the start, Mohr–Coulomb law, up to its first time step
-(paper scenario, element sizes 0.5 and 0.25 m to R = 30 m: 154 MB for 12 474 elements and
-548 MB for 49 387, 11.1 kB each; most of it SuperLU's factors, 29 M entries at 49 387
-elements); OpenSees' growth over the same meshes was 9 kB per element (108 and 427 MB)."""
+(paper scenario, R = 30 m: 163 MB for 12 474 elements of 0.5 m and 571 MB for 49 387 of
+0.25 m, 11.6–13 kB each, most of it SuperLU's factors, 29 M entries at 49 387 elements; 181 MB,
+14.5 kB each, at 12 474 elements with c_u = 12 kPa, where the gravity stage yields and Newton
+refactorises); OpenSees' growth over the same meshes was 9 kB per element (108 and 427 MB)."""
 MAX_FE_ELEMENTS = 200_000
-"""Most soil elements of an FE section: about 2.2 GB at :data:`FE_BYTES_PER_ELEMENT` (a 0.15 m
+"""Most soil elements of an FE section: about 3 GB at :data:`FE_BYTES_PER_ELEMENT` (a 0.15 m
 mesh to R = 30 m has 137 122)."""
 
 

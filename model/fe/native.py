@@ -409,6 +409,8 @@ class NativeSection:
         for _ in range(MAX_ITERATIONS):
             residual = load - self.internal_force(self.u, with_lining, tangents)
             if self.yielding:
+                lu = None  # memory: one factorisation alive at a time
+                self._static_factors.pop(with_lining, None)
                 matrix = self._stiffness(with_lining, self._tangent(tangents))
                 lu = factorise(matrix[free][:, free])
             else:
