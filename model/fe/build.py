@@ -49,6 +49,10 @@ SPRING_NORMAL, SPRING_TANGENTIAL = 1.0, 0.5
 DISP_TOLERANCE = 1e-9
 """Plastic soil: a time step has also converged when the displacement correction (m, 2-norm)
 is below this."""
+MAX_ITERATIONS = 100
+"""Most iterations of a time step and of the static equilibrium (both engines)."""
+PLASTIC_GRAVITY_STEPS = 10
+"""Load steps of the gravity stage with plastic soil (one with elastic soil; both engines)."""
 PENALTY = 1e14
 """Penalty factor of the lining's equalDOF ties (N/m): 100 × LINK_STIFFNESS."""
 LINK_STIFFNESS = 1e12
@@ -303,7 +307,7 @@ def apply_gravity(ops, scenario, mesh, soil_law):
     ops.system("UmfPack")
     ops.test("NormDispIncr", 1e-9, 50)
     ops.algorithm("Newton")
-    n_steps = 1 if soil_law == "elastic" else 10
+    n_steps = 1 if soil_law == "elastic" else PLASTIC_GRAVITY_STEPS
     ops.integrator("LoadControl", 1.0 / n_steps)
     ops.analysis("Static")
     if ops.analyze(n_steps) != 0:
@@ -349,7 +353,7 @@ def static_equilibrium(ops):
     ops.constraints("Penalty", PENALTY, PENALTY)
     ops.numberer("RCM")
     ops.system("UmfPack")
-    ops.test("NormDispIncr", 1e-10, 100)
+    ops.test("NormDispIncr", 1e-10, MAX_ITERATIONS)
     ops.algorithm("Newton")
     ops.integrator("LoadControl", 0.0)
     ops.analysis("Static")
@@ -375,7 +379,7 @@ def transient_analysis(ops, soil_law, a0, a1, unbalance_N):
     if soil_law == "elastic":
         ops.algorithm("Linear", "-factorOnce")
     else:
-        ops.test("NormDispOrUnbalance", DISP_TOLERANCE, unbalance_N, 100, 0)
+        ops.test("NormDispOrUnbalance", DISP_TOLERANCE, unbalance_N, MAX_ITERATIONS, 0)
         ops.algorithm("ModifiedNewton", "-factoronce")
     ops.integrator("Newmark", 0.5, 0.25)
     ops.analysis("Transient")

@@ -23,6 +23,8 @@ import numpy as np
 
 ELEMENTS_PER_WAVELENGTH = 6
 """Fewest bilinear elements per shortest S wavelength of the load band (phase error ≲ 3 %)."""
+GAUSS_POINTS = np.array([-1.0, 1.0]) / math.sqrt(3.0)
+"""The 2-point Gauss rule on [−1, 1] (unit weights) of the bilinear quads, per direction."""
 STEPS_PER_PERIOD = 20
 """FE time steps per period of f_hi (Newmark period elongation ≈ 0.8 %)."""
 
@@ -200,9 +202,8 @@ def body_loads(mesh: SectionMesh, body_force_y):
     x = np.stack([mesh.xy(a, b)[0] for a, b in corners], axis=-1)  # (nr, nt, 4)
     y = np.stack([mesh.xy(a, b)[1] for a, b in corners], axis=-1)
     forces = np.zeros((nr + 1, nt + 1))
-    gauss = np.array([-1.0, 1.0]) / math.sqrt(3.0)
-    for s in gauss:
-        for t in gauss:
+    for s in GAUSS_POINTS:
+        for t in GAUSS_POINTS:
             shape = 0.25 * np.array(
                 [(1 - s) * (1 - t), (1 + s) * (1 - t), (1 + s) * (1 + t), (1 - s) * (1 + t)]
             )

@@ -40,7 +40,9 @@ from scipy.sparse.linalg import splu
 from model.fe.build import (
     DISP_TOLERANCE,
     LINK_STIFFNESS,
+    MAX_ITERATIONS,
     PENALTY,
+    PLASTIC_GRAVITY_STEPS,
     FEConvergenceError,
     anchor_stiffness,
     boundary_coefficients,
@@ -48,19 +50,14 @@ from model.fe.build import (
     lining_beam,
     plastic_soil,
 )
-from model.fe.mesh import SectionMesh, body_loads
+from model.fe.mesh import GAUSS_POINTS, SectionMesh, body_loads
 from model.params import Scenario
 
-GAUSS = np.array([-1.0, 1.0]) / math.sqrt(3.0)
 STATIC_TOLERANCE = 1e-10
 """Static stages: converged when Newton's displacement correction (m, 2-norm) is below this
 (OpenSees' test: 10⁻⁹ m in the gravity stage, 10⁻¹⁰ m in the static equilibrium)."""
-MAX_ITERATIONS = 100
-"""Most iterations of a time step or a static stage (as OpenSees' tests)."""
 NO_TANGENT = np.empty((0, 8, 8))
 """``plastic_forces``' tangent argument when none is wanted."""
-GRAVITY_STEPS_PLASTIC = 10
-"""Load steps of the plastic law's gravity stage (as ``model.fe.build.apply_gravity``)."""
 
 
 # ---- element matrices -------------------------------------------------------------------------
@@ -87,7 +84,7 @@ def quad_kinematics(mesh: SectionMesh):
     strain_matrix = np.zeros((nodes.shape[0], 4, 3, 8))
     weight = np.empty((nodes.shape[0], 4))
     signs_s, signs_t = np.array([-1.0, 1.0, 1.0, -1.0]), np.array([-1.0, -1.0, 1.0, 1.0])
-    for g, (s, t) in enumerate((s, t) for t in GAUSS for s in GAUSS):
+    for g, (s, t) in enumerate((s, t) for t in GAUSS_POINTS for s in GAUSS_POINTS):
         dn_ds = 0.25 * signs_s * (1 + signs_t * t)
         dn_dt = 0.25 * signs_t * (1 + signs_s * s)
         j11, j12 = x @ dn_ds, y @ dn_ds
@@ -433,9 +430,9 @@ class NativeSection:
 
     def _gravity(self) -> None:
         """The gravity stage: soil only, held vertically at the bottom axis node by the anchor,
-        the geostatic loads in one step (elastic) or ``GRAVITY_STEPS_PLASTIC`` (plastic)."""
+        the geostatic loads in one step (elastic) or ``PLASTIC_GRAVITY_STEPS`` (plastic)."""
         self.anchor = anchor_stiffness(self.scenario)
-        steps = 1 if self.soil_law == "elastic" else GRAVITY_STEPS_PLASTIC
+        steps = 1 if self.soil_law == "elastic" else PLASTIC_GRAVITY_STEPS
         for step in range(1, steps + 1):
             self._static_solve(self.gravity_force * step / steps, with_lining=False)
 
