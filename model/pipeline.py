@@ -85,6 +85,7 @@ class SimulationError(RuntimeError):
 
 
 Progress = Callable[[str, float], None]
+StageDone = Callable[[str, Any], None]
 
 
 @dataclass(frozen=True)
@@ -337,7 +338,10 @@ def invert_line_load(block_force_N: np.ndarray, block_spacing_m: float) -> np.nd
 
 
 def run(
-    scenario: Scenario, progress: Progress | None = None, cache: StageCache | None = None
+    scenario: Scenario,
+    progress: Progress | None = None,
+    cache: StageCache | None = None,
+    on_stage: StageDone | None = None,
 ) -> Results:
     """Run every stage (or every stage that ``cache`` cannot serve).
 
@@ -354,6 +358,12 @@ def run(
     cache : StageCache or None
         Stage cache owned by the caller (e.g. the dashboard); ``None`` (the default) computes
         everything afresh.
+    on_stage : callable(stage, output), optional
+        Told each stage's name and output once it is ready (computed or served), in the
+        computing thread, before the next stage starts: the vehicle–track result, the load,
+        the soil stage's ``(soil, stress, ground)`` and the long-term result, as
+        :class:`Results` holds them. A user interface may show a stage's outputs before the
+        run ends.
 
     Returns
     -------
@@ -380,11 +390,14 @@ def run(
     check_inputs(scenario)
     check_longterm_inputs(scenario)
     report = progress or (lambda stage, fraction: None)
+    done = on_stage or (lambda stage, output: None)
     keys = stage_keys(scenario)
     seconds: dict[str, float] = {}
     cached: list[str] = []
 
-    def stage(name, compute):
+    def stage(name, compute, accept=lambda value: None):
+        """The output of stage ``name`` (served or ``compute()``d), once ``accept(output)``
+        has not raised."""
         report(name, 0.0)
         start = time.perf_counter()
         if cache is None:
@@ -395,15 +408,15 @@ def run(
         if served:
             cached.append(name)
         report(name, 1.0)
+        accept(value)
+        done(name, value)
         return value
 
     vt = stage(
-        "vehicle_track", lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f))
+        "vehicle_track",
+        lambda: simulate(scenario, progress=lambda f: report("vehicle_track", f)),
+        accept=_stable,
     )
-    if vt.unstable:
-        raise SimulationError(
-            "the vehicle–track simulation went unstable: " + "; ".join(vt.warnings)
-        )
     load = stage("load", lambda: _load_stage(vt, scenario))
 
     # the half-space model adds the ground-surface results (docs/halfspace.md)
@@ -450,6 +463,14 @@ def run(
         stage_seconds=seconds,
         cached_stages=tuple(cached),
     )
+
+
+def _stable(vt: VehicleTrackResult) -> None:
+    """Raise :class:`SimulationError` if the vehicle–track integration went unstable."""
+    if vt.unstable:
+        raise SimulationError(
+            "the vehicle–track simulation went unstable: " + "; ".join(vt.warnings)
+        )
 
 
 def _read_only(stage_result):

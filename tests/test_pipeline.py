@@ -261,6 +261,34 @@ def test_progress_reports_each_stage_in_order_from_zero_to_one(cheap_scenario):
         assert all(np.diff(fractions) >= 0)
 
 
+def test_each_stage_output_is_handed_on_once_it_is_ready(cheap_scenario):
+    """``on_stage`` is told each stage's output, in order, before the next stage starts (a
+    page draws the first stages' plots while the soil stage computes), computed or served."""
+    shared = StageCache()
+    for cache in (None, shared, shared):  # no cache, every stage computed, every stage served
+        events, outputs = [], {}
+
+        def on_stage(stage, output, events=events, outputs=outputs):
+            events.append(("done", stage))
+            outputs[stage] = output
+
+        results = run(
+            cheap_scenario(),
+            progress=lambda stage, f, events=events: events.append((f"at {f:g}", stage)),
+            cache=cache,
+            on_stage=on_stage,
+        )
+        assert [stage for kind, stage in events if kind == "done"] == list(pipeline.STAGES)
+        assert outputs["vehicle_track"] is results.vehicle_track
+        assert outputs["load"] is results.load
+        soil = (results.soil, results.stress, results.ground)
+        assert all(a is b for a, b in zip(outputs["soil"], soil, strict=True))
+        assert outputs["longterm"] is results.longterm
+        for stage, following in zip(pipeline.STAGES, pipeline.STAGES[1:], strict=False):
+            assert events.index(("done", stage)) < events.index(("at 0", following))
+    assert set(results.cached_stages) == set(pipeline.STAGES)
+
+
 def test_fast_train_on_soft_soil_and_short_records_give_warnings_not_errors():
     scenario = Scenario.paper()
     assert pipeline.scenario_warnings(scenario) == []
@@ -301,10 +329,11 @@ def test_unstable_integration_stops_the_pipeline_with_the_reason(monkeypatch, ch
     scenario = cheap_scenario()
     scenario.numerics.dt = 2.5e-4
     monkeypatch.setattr(vehicle_track, "stable_time_step", lambda s: 1.0)
-    cache = StageCache()
+    cache, handed_on = StageCache(), []
     with pytest.raises(pipeline.SimulationError, match="went unstable.*numerics.dt"):
-        run(scenario, cache=cache)
+        run(scenario, cache=cache, on_stage=lambda stage, output: handed_on.append(stage))
     assert cache.misses["load"] == cache.misses["soil"] == 0
+    assert handed_on == []  # the diverged record is not handed on either
 
 
 # ---- command line ---------------------------------------------------------------------------
