@@ -4,7 +4,8 @@
   different sessions compute in parallel (the Numba kernels release the GIL).
 * One :class:`LatestRun` per session: at most one run of the session computes at a time and
   at most one waits; a newer request replaces the waiting one, so dragging a slider or pressing
-  an arrow key repeatedly never queues stale runs.
+  an arrow key repeatedly never queues stale runs. A computing run may hand on parts of its
+  outcome (:meth:`LatestRun.post`), shown before it ends.
 * :func:`warm_up`: one cheap run when the server starts, so the kernels are compiled (or loaded
   from Numba's cache) before the first visitor asks for a result.
 """
@@ -94,6 +95,10 @@ class LatestRun(Generic[Job, Outcome]):
         """The job submitted by :meth:`request`, not yet taken by :meth:`drain`."""
         self._busy = False
         self._cancelled = False
+        self._parts: list[object] = []
+        """Parts of the computing job's outcome posted and not yet handed on."""
+        self._wake: Callable[[], None] | None = None
+        """Wakes the awaiting :meth:`drain` when a part is posted, while one runs."""
 
     @property
     def busy(self) -> bool:
@@ -114,7 +119,7 @@ class LatestRun(Generic[Job, Outcome]):
             if self._busy:
                 self._waiting, self._has_waiting = job, True
                 return False
-            self._busy = True
+            self._busy, self._parts = True, []
             self._computing = (job, self._submit(job))
             return True
 
@@ -134,6 +139,24 @@ class LatestRun(Generic[Job, Outcome]):
         """
         if self._cancelled:
             raise RunCancelled(f"the session closed during {where}")
+
+    def post(self, part: object) -> None:
+        """Hand ``part`` of the computing job's outcome to :meth:`drain`, which passes it on
+        as soon as it can (called by the job's ``compute``, in its worker thread). Dropped
+        after :meth:`cancel`."""
+        with self._lock:
+            if self._cancelled:
+                return
+            self._parts.append(part)
+            wake = self._wake
+        if wake is not None:
+            wake()
+
+    def _take_parts(self) -> list[object]:
+        """The parts posted since the last call."""
+        with self._lock:
+            parts, self._parts = self._parts, []
+        return parts
 
     def cancel(self) -> None:
         """Drop the waiting job and every later request; the outcome of the job computing is
@@ -158,6 +181,7 @@ class LatestRun(Generic[Job, Outcome]):
                 self._busy = False
                 return None
             job, self._waiting, self._has_waiting = self._waiting, None, False
+            self._parts = []
         return job, self._submit(job)
 
     async def drain(
@@ -166,24 +190,39 @@ class LatestRun(Generic[Job, Outcome]):
         finished: Callable[[Job, Outcome | BaseException], None],
         tick: Callable[[], None] | None = None,
         poll_s: float = 0.1,
+        posted: Callable[[Job, object], None] | None = None,
     ) -> None:
         """Compute jobs until none waits: ``started(job)`` (the job may be computing already,
         since its request), then ``finished(job, outcome)``.
 
         ``tick()`` is called every ``poll_s`` seconds while a job computes (progress display),
-        not once it has finished.
+        not once it has finished. ``posted(job, part)`` is called for each part of its outcome
+        the job hands on (:meth:`post`), as soon as it does, and before ``finished``.
         The callbacks run in the awaiting event loop, never in a worker thread.
         """
+        loop, woken = asyncio.get_running_loop(), asyncio.Event()
+        with self._lock:
+            self._wake = lambda: loop.call_soon_threadsafe(woken.set)
         try:
             while (computing := self._next()) is not None:
                 job, submitted = computing
                 if not self._cancelled:
                     started(job)
                 future = asyncio.wrap_future(submitted)
-                while not future.done():
-                    await asyncio.wait([future], timeout=poll_s)
+                while True:
+                    for part in self._take_parts():  # posted before its outcome is ready
+                        if posted is not None and not self._cancelled:
+                            posted(job, part)
+                    if future.done():
+                        break
+                    wake = asyncio.ensure_future(woken.wait())
+                    done, _ = await asyncio.wait(
+                        [future, wake], timeout=poll_s, return_when=asyncio.FIRST_COMPLETED
+                    )
+                    wake.cancel()
+                    woken.clear()
                     # no progress shown once it is done: its results follow at once
-                    if tick is not None and not self._cancelled and not future.done():
+                    if not done and tick is not None and not self._cancelled:
                         tick()
                 if not self._cancelled:
                     finished(job, future.result())
@@ -192,3 +231,6 @@ class LatestRun(Generic[Job, Outcome]):
                 self._busy, self._waiting, self._has_waiting = False, None, False
                 self._computing = None
             raise
+        finally:
+            with self._lock:
+                self._wake = None

@@ -126,6 +126,71 @@ def test_a_job_cancelled_before_the_drain_is_not_shown(pool):
     assert started == [] and finished == [] and not runs.busy
 
 
+def test_parts_of_an_outcome_are_handed_on_while_the_job_computes(pool):
+    """``post`` from the computing job reaches ``posted`` at once, before the job ends (the
+    page draws the first stages' plots meanwhile), in order, and never a progress tick."""
+    seen, release = [], threading.Event()
+
+    def compute(job):
+        runs.post(("first part", job))
+        runs.post(("second part", job))
+        assert release.wait(timeout=60)  # ends only once both parts were handed on
+        runs.post(("last part", job))  # posted as it ends: still before its outcome
+        return job * 10
+
+    def posted(job, part):
+        seen.append(part)
+        if len(seen) == 2:
+            release.set()
+
+    runs = LatestRun(compute, pool)
+    ticks, finished = [], []
+    assert runs.request(1)
+    asyncio.run(
+        runs.drain(
+            lambda job: None,
+            lambda job, outcome: finished.append((list(seen), outcome)),
+            tick=lambda: ticks.append(1),
+            poll_s=30.0,
+            posted=posted,
+        )
+    )
+    parts = [("first part", 1), ("second part", 1), ("last part", 1)]
+    assert finished == [(parts, 10)] and ticks == []
+
+
+def test_a_cancelled_jobs_parts_are_not_handed_on(pool):
+    """A session closed while its job computes: what the job posts after that is dropped."""
+    computed, release, seen = [], threading.Event(), []
+
+    def compute(job):
+        computed.append(job)
+        assert release.wait(timeout=60)
+        runs.post("after the close")
+        return job
+
+    runs = LatestRun(compute, pool)
+    started, finished = [], []
+
+    async def scenario():
+        assert runs.request(1)
+        draining = asyncio.create_task(
+            runs.drain(
+                *_record(started, finished),
+                poll_s=0.01,
+                posted=lambda job, part: seen.append(part),
+            )
+        )
+        while not computed:
+            await asyncio.sleep(0.01)
+        runs.cancel()
+        release.set()
+        await draining
+
+    asyncio.run(scenario())
+    assert seen == [] and finished == []
+
+
 def test_sessions_compute_in_parallel(pool):
     """Two sessions' runs overlap in time: each waits until the other has started (a barrier
     that a one-worker pool could never pass)."""
