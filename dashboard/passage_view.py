@@ -92,4 +92,4 @@ class PassageView(PlotsView):
         """The pinned runs changed: new passage plots (a plot's set of curves is fixed when
         it is first drawn)."""
         if self._results is not None:
-            self.plots.rebuild(self._results)
+            self.plots.rebuild()

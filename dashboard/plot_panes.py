@@ -147,25 +147,34 @@ class PlotPanes:
 
     def show(self, results: Results, redrawn: set[str]) -> None:
         """Draw ``results`` in the plots of the ``redrawn`` stages; undim every plot."""
+        self.show_stages(results, redrawn)
+        self.settle()
+
+    def show_stages(self, results: Results, stages: set[str]) -> None:
+        """Draw ``results`` in the plots of ``stages`` (it may hold only their outputs) and
+        undim them; the other plots are left as they are."""
         for spec in self.specs:
-            if spec.stage in redrawn:
+            if spec.stage in stages:
                 stream = self.streams.get(spec.key)
                 if stream is None:
                     self._new_plot(spec, results)
                 else:
                     stream.send(results)
-            self._set_stale(spec.key, False)
+                self._set_stale(spec.key, False)
 
     def settle(self) -> None:
         """Undim every plot (the run they waited for failed: they keep what they show)."""
         for key in self.panes:
             self._set_stale(key, False)
 
-    def rebuild(self, results: Results) -> None:
-        """New plots of ``results`` in place of the drawn ones (the set of curves a plot draws
-        is fixed when it is made: a change of that set needs a new plot)."""
+    def rebuild(self) -> None:
+        """New plots in place of the drawn ones, each of the results it shows (the set of
+        curves a plot draws is fixed when it is made: a change of that set needs a new
+        plot)."""
         for spec in self.specs:
-            self._new_plot(spec, results)
+            stream = self.streams.get(spec.key)
+            if stream is not None:
+                self._new_plot(spec, stream.data)
 
     def redraw(self, key: str, results: Results) -> None:
         """A new plot ``key`` of ``results`` in place of the drawn one (its set of curves
@@ -225,6 +234,11 @@ class PlotsView(pn.viewable.Viewer):
     def settle(self) -> None:
         """Undim the plots: the run they waited for failed."""
         self.plots.settle()
+
+    def show_stages(self, results: Results, stages: set[str]) -> None:
+        """Draw the plots of ``stages`` only, from ``results`` (which may hold only their
+        outputs: a run still computing its later stages)."""
+        self.plots.show_stages(results, stages)
 
     def close(self) -> None:
         """Drop the plots of a closed session."""

@@ -3,10 +3,12 @@
 :class:`SessionRuns` brings the results up to date with the session's scenario: a change
 requests a run (:class:`~dashboard.scheduler.LatestRun`: one computing, the newest request
 waiting), computed in the shared pool with the server's stage cache; meanwhile the plots it
-will change are dimmed and a progress bar and status line follow it. Its results go to the
-views that show them (the passage and long-term views, :class:`ResultsView`) in one message to
-the browser. Once they are on screen, the same scenario with the other tunnel–soil model is
-run for the depth plot's faint comparison curve.
+will change are dimmed and a progress bar and status line follow it. The plots of its first
+stages (the vehicle–track and load plots) are drawn as soon as those stages are done, while the
+soil stage computes; the rest of its results go to the views that show them (the passage and
+long-term views, :class:`ResultsView`) in one message to the browser when it ends. Once they are
+on screen, the same scenario with the other tunnel–soil model is run for the depth plot's faint
+comparison curve.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import asyncio
 import html
 import logging
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Protocol
@@ -57,6 +59,11 @@ PROGRESS_REFRESH_S = 0.25
 PROGRESS_SHOWN = {"opacity": "1"}
 PROGRESS_HIDDEN = {"opacity": "0"}
 
+EARLY_STAGES = ("vehicle_track", "load")
+"""Stages whose plots are drawn as soon as they are done, before the run ends: the browser
+draws them while the server computes the soil stage (on a typed speed, 0.1 s less from the
+Enter key to the last plot drawn, docs/dashboard.md)."""
+
 STAGE_NAMES = {"vehicle_track": "vehicle–track", "longterm": "long-term settlement"}
 """Stage names as shown, where they differ from the pipeline's."""
 
@@ -80,6 +87,10 @@ class ResultsView(Protocol):
 
     def mark_stale(self, stages: set[str]) -> None:
         """A run computing will change the outputs of ``stages``."""
+
+    def show_stages(self, results: Results, stages: set[str]) -> None:
+        """Draw the plots of ``stages`` only, from ``results`` (which may hold only their
+        outputs)."""
 
     def show(self, results: Results, redrawn: set[str]) -> None:
         """Show ``results``; only the outputs of the ``redrawn`` stages changed."""
@@ -170,6 +181,8 @@ class SessionRuns(param.Parameterized):
         """The other model's curve on the depth plot: "computing", "shown" or "unavailable"."""
         self.companion_delay_s = COMPANION_DELAY_S if threaded else 0.0
         self._shown_keys: dict[str, str] = {}
+        self._drawn_early: dict[str, str | None] = {}
+        """Stages of the computing run drawn before it ended, with the keys shown before."""
         self._progress_state = ("", 0.0)
 
         self.progress = pn.indicators.Progress(
@@ -249,7 +262,11 @@ class SessionRuns(param.Parameterized):
         plot. If the session closed meanwhile, the memory goes back once its runs stopped."""
         try:
             await self.latest.drain(
-                self._start, self._finish, tick=self._show_progress, poll_s=PROGRESS_REFRESH_S
+                self._start,
+                self._finish,
+                tick=self._show_progress,
+                poll_s=PROGRESS_REFRESH_S,
+                posted=self._show_early,
             )
             if self._companion_wanted is None:
                 return
@@ -268,8 +285,34 @@ class SessionRuns(param.Parameterized):
         FE result of the scenario."""
         if self.warm is not None:
             self.warm.result()  # the kernels compile once, not once per waiting session
-        results = run(admitted(scenario), progress=self._note_progress, cache=self.cache)
+        results = run(
+            admitted(scenario),
+            progress=self._note_progress,
+            cache=self.cache,
+            on_stage=self._post_early_stages(scenario),
+        )
         return results, stored_fe_result(scenario, FE_RESULTS_DIR)
+
+    def _post_early_stages(self, scenario: Scenario) -> Callable[[str, object], None]:
+        """The run's ``on_stage``: once the :data:`EARLY_STAGES` are done, their outputs go
+        to the page (:meth:`LatestRun.post`) as results holding only them."""
+        outputs: dict[str, object] = {}
+
+        def done(stage: str, output: object) -> None:
+            outputs[stage] = output
+            if stage == EARLY_STAGES[-1]:
+                self.latest.post(
+                    Results(
+                        scenario_json=scenario.to_json(),
+                        vehicle_track=outputs["vehicle_track"],
+                        load=outputs["load"],
+                        soil=None,
+                        stress=None,
+                        longterm=None,
+                    )
+                )
+
+        return done
 
     def _compute_companion(self, other: Scenario) -> Results | None:
         """The scenario with the other tunnel–soil model (in a worker thread; its vehicle–track
@@ -302,6 +345,22 @@ class SessionRuns(param.Parameterized):
         stale = self._stale_stages(scenario)
         for view in self.views:
             view.mark_stale(stale)
+
+    @one_message(reindex_once=True)
+    def _show_early(self, scenario: Scenario, early: Results) -> None:
+        """Draw the plots of the :data:`EARLY_STAGES` that changed from ``early`` (the run of
+        ``scenario``, still computing), once every plot exists; the first run's plots are
+        all drawn at its end."""
+        if self.results is None or not all(view.drawn for view in self.views):
+            return
+        keys = stage_keys(scenario)
+        stages = {stage for stage in EARLY_STAGES if self._shown_keys.get(stage) != keys[stage]}
+        for stage in stages:
+            self._drawn_early[stage] = self._shown_keys.get(stage)
+            self._shown_keys[stage] = keys[stage]
+            self.render_counts[stage] += 1
+        for view in self.views:
+            view.show_stages(early, stages)
 
     def _note_progress(self, stage: str, fraction: float) -> None:
         """Pipeline progress callback (runs in a worker thread): remember it, or stop the run
@@ -341,6 +400,7 @@ class SessionRuns(param.Parameterized):
         if isinstance(outcome, BaseException):
             self._show_failure(outcome)
             return
+        self._drawn_early.clear()
         results, self.fe_result = outcome
         # ``scenario`` is this run's own copy of the inputs (``results.scenario`` would parse
         # them again): it gives the stage keys, then becomes the other model's job
@@ -364,6 +424,11 @@ class SessionRuns(param.Parameterized):
             if not isinstance(error, ValueError | KeyError | SimulationError):
                 log.error("pipeline run failed", exc_info=error)
         self.messages.show_error(headline, [scenarios.error_text(error)])
+        if self._drawn_early:  # those plots show the previous results again
+            self._shown_keys.update(self._drawn_early)
+            for view in self.views:
+                view.show_stages(self.results, set(self._drawn_early))
+            self._drawn_early.clear()
         for view in self.views:
             view.settle()
         self.status.object = (

@@ -10,6 +10,7 @@ import html
 import io
 import json
 import re
+import time
 from concurrent.futures import Future
 from types import SimpleNamespace
 
@@ -272,6 +273,86 @@ def test_speed_change_updates_every_plot(dashboard):
         after = np.concatenate(_pane_data(dashboard, key))
         assert after.shape != before[key].shape or not np.array_equal(after, before[key]), key
     assert dashboard.runs.render_counts == dict.fromkeys(STAGES, 2)
+
+
+def _while_the_soil_stage_computes(monkeypatch, look=None, fail=False):
+    """Make the soil stage call ``look()`` first, once the page has drawn the first stages'
+    plots (it waits for them up to a minute), and raise after it if ``fail``."""
+    from model import pipeline
+
+    section_response = pipeline.section_response
+
+    def soil_stage(*args):
+        if look is not None:
+            look()
+        if fail:
+            raise RuntimeError("the soil stage failed")
+        return section_response(*args)
+
+    monkeypatch.setattr(pipeline, "section_response", soil_stage)
+
+
+def _early_drawn(board, deadline_s=60.0):
+    """Wait until the block-displacement plot shows the results of a run still computing
+    (its first stages only); True when it does."""
+    end = time.monotonic() + deadline_s
+    while time.monotonic() < end:
+        if _streams(board)["block_displacement"].data.soil is None:
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def test_the_first_stages_plots_are_drawn_while_the_soil_stage_computes(dashboard, monkeypatch):
+    """A speed change: the vehicle–track and load plots show the new run before its soil
+    stage ends (from its first stages' outputs), the soil plots and key numbers at its end."""
+    old, summary = dashboard.runs.results, dashboard.passage.summary.object
+    during = {}
+
+    def look():
+        if during:  # the other tunnel–soil model's run, after the results
+            return
+        assert _early_drawn(dashboard)
+        streams = _streams(dashboard)
+        for spec in plots.PLOTS:
+            during[spec.key] = (streams[spec.key].data, _is_stale(dashboard, spec.key))
+        during["summary"] = dashboard.passage.summary.object
+
+    _while_the_soil_stage_computes(monkeypatch, look)
+    dashboard.inputs.controls["train.speed_kmh"].enter("86")  # a speed no other test runs
+    new = dashboard.runs.results
+    assert new.scenario.train.speed_kmh == 86.0 and during["summary"] == summary
+    for spec in plots.PLOTS:
+        shown, stale = during[spec.key]
+        early = spec.stage in ("vehicle_track", "load")
+        assert (shown is old) == (not early) and stale == (not early), spec.key
+        if early:  # the new run's own outputs, drawn once
+            assert shown.vehicle_track is new.vehicle_track and shown.load is new.load
+        sent = _streams(dashboard)[spec.key].data
+        assert (sent is shown) == early and (sent is new) == (not early), spec.key
+        assert not _is_stale(dashboard, spec.key)
+    assert dashboard.runs.render_counts == dict.fromkeys(STAGES, 2)
+    assert dashboard.passage.summary.object != summary
+
+
+def test_a_run_failing_after_its_first_stages_leaves_the_previous_results_on_every_plot(
+    dashboard, monkeypatch
+):
+    """The soil stage fails after the vehicle–track and load plots showed the new run: they
+    show the previous results again, as the page says, and the next run draws them anew."""
+    old = dashboard.runs.results
+    _while_the_soil_stage_computes(monkeypatch, lambda: _early_drawn(dashboard), fail=True)
+    dashboard.inputs.controls["train.speed_kmh"].enter("83")  # a speed no other test runs
+    assert "the soil stage failed" in dashboard.messages.error_alert.object
+    assert "the plots show the previous results" in dashboard.runs.status.object
+    for key, stream in _streams(dashboard).items():
+        assert stream.data is old and not _is_stale(dashboard, key), key
+    monkeypatch.undo()
+    dashboard.inputs.controls["train.speed_kmh"].enter("84")
+    new = dashboard.runs.results
+    for spec in plots.PLOTS:
+        assert _shown(dashboard, spec.key) is not None
+        assert _streams(dashboard)[spec.key].data.vehicle_track is new.vehicle_track, spec.key
 
 
 def test_slider_values_are_rounded_to_the_slider_step(dashboard):
@@ -607,7 +688,9 @@ def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeyp
         monkeypatch.setattr(manager, "recompute", counted)
         board.scenario.train.speed_kmh += 5.0  # a run that redraws every plot
     assert board.runs.results.scenario.train.speed_kmh == cheap_scenario().train.speed_kmh + 5.0
-    assert len(indexings) <= 2  # the results, and the other model's curve after them
+    # the first stages' plots (drawn while the soil stage computes), the rest of the results,
+    # and the other model's curve after them
+    assert len(indexings) <= 3
 
 
 def test_a_change_leaves_the_pinned_runs_alone_and_the_axes_cover_them(
