@@ -325,7 +325,7 @@ def _interpolate_rows(sample_times, samples, times) -> np.ndarray:
     return samples[index] * (1.0 - weight) + samples[index + 1] * weight
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _march(
     storage,
     conductance,

@@ -75,7 +75,7 @@ def range_weighted_cycles(history) -> float:
     return rainflow_weighted_sum(turning_points(series)) / peak
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def turning_points(series):
     """The first and last values of a 1-D series and every value where its slope changes sign
     (flat stretches skipped)."""
@@ -95,7 +95,7 @@ def turning_points(series):
     return out[: count + 1]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def rainflow_weighted_sum(points):
     """Σ count · range over the rainflow cycles of a series (ASTM E1049 §5.4.4), in the order
     and arithmetic of ``rainflow.extract_cycles`` (its reversals first, then the three-point

@@ -72,7 +72,7 @@ def kernel_sample_bins(
     return np.concatenate([graded, np.arange(k, n_freq - 1, stride), [n_freq - 1]]).astype(int)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def lagrange_stencils(nodes, n_freq, width):
     """(sample, first, weights) per bin: bin k is sample[k]'s value when sampled (≥ 0), else
     Σ_m weights[k, m] · value[first[k] + m], the Lagrange interpolant of the ``width`` samples
@@ -99,7 +99,7 @@ def lagrange_stencils(nodes, n_freq, width):
     return sample, first, weights
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def apply_stencils(sample, first, weights, row_of, values, out):
     """Fill (n_freq, m) ``out`` from sampled rows by :func:`lagrange_stencils`'s weights
     (sampled rows copied as they are; each value written once): sample i is row row_of[i] of
@@ -262,7 +262,7 @@ def record_grid_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> lis
     return _sampled_transfer(f_hz, bins, evaluate(freq), None, slice(None))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nested_subset(nodes, factor, base_stride, samples_per_cycle):
     """Indices into ``nodes`` (a :func:`kernel_sample_bins` sampling of stride s) of the coarser
     sampling of stride factor · s: from each kept bin k the next kept node is the farthest within
@@ -392,7 +392,7 @@ def depth_sampled_transfer(f_hz, depth_m, evaluate, tunnel, soil, numerics) -> l
     return transfers
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def apply_grouped_stencils(samples, firsts, weights, rows, spans, values, out):
     """:func:`apply_stencils` for several groups of columns at once: group g fills the (float)
     columns spans[g, 0] … spans[g, 1] − 1 of ``out`` from the rows rows[g] of ``values`` with

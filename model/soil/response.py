@@ -275,7 +275,7 @@ class RecordGrid:
         return histories
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _product_rows(transfer, minus, load, first, count, out):
     """out[r, k] = (transfer − minus)[k, first + r] · load[k], r < count (the transposed
     products; ``minus`` None: transfer alone)."""

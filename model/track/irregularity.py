@@ -145,7 +145,7 @@ def _series_on_uniform_grid(x_start, x_step, n_points, amplitudes, wavenumbers, 
     return (np.exp(1j * (wavenumbers[0] * x_step * j + half_chirp * j * j)) * convolved).real
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _series_at_points(x, amplitudes, wavenumbers, phases):
     """Σ_k a_k cos(Ω_k x + φ_k) at arbitrary points x by direct evaluation."""
     out = np.empty(x.size)

@@ -496,7 +496,7 @@ def record(out, state, track, vehicle, scratch, outputs):
 WINKLER_ANCHOR_SAMPLES = 32
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def winkler_shape_sum(t_start, t_step, n_samples, pass_times, decay_rate, reach):
     """Σ_j e^{−ξ_j}(cos ξ_j + sin ξ_j), ξ_j = decay_rate·|t − t_j|, at t = t_start + n·t_step.
 
