@@ -346,21 +346,23 @@ class SessionRuns(param.Parameterized):
         for view in self.views:
             view.mark_stale(stale)
 
-    @one_message(reindex_once=True)
     def _show_early(self, scenario: Scenario, early: Results) -> None:
         """Draw the plots of the :data:`EARLY_STAGES` that changed from ``early`` (the run of
         ``scenario``, still computing), once every plot exists; the first run's plots are
-        all drawn at its end."""
+        all drawn at its end. A change that leaves them alone (a soil change) sends nothing."""
         if self.results is None or not all(view.drawn for view in self.views):
             return
         keys = stage_keys(scenario)
         stages = {stage for stage in EARLY_STAGES if self._shown_keys.get(stage) != keys[stage]}
+        if not stages:
+            return
         for stage in stages:
             self._drawn_early[stage] = self._shown_keys.get(stage)
             self._shown_keys[stage] = keys[stage]
             self.render_counts[stage] += 1
-        for view in self.views:
-            view.show_stages(early, stages)
+        with pn.io.hold(freeze=True):  # one message, the models re-indexed once
+            for view in self.views:
+                view.show_stages(early, stages)
 
     def _note_progress(self, stage: str, fraction: float) -> None:
         """Pipeline progress callback (runs in a worker thread): remember it, or stop the run
