@@ -13,11 +13,16 @@ from collections.abc import Callable
 import panel as pn
 
 from dashboard import plots
-from dashboard.plot_panes import PlotPanes, PlotsView, one_message
+from dashboard.plot_panes import STALE_PLOT_STYLES, PlotPanes, PlotsView, one_message
 from dashboard.report import ITEMS_CSS, items_html
 from dashboard.whatif_view import WhatIfPanel
 from model.params import Soil
 from model.pipeline import Results
+
+# The key numbers are dimmed like the plots while a run computes: the vehicle–track plots show
+# the new run before its key numbers do (dashboard.runs.EARLY_STAGES).
+SUMMARY_STYLES = {"opacity": "1"}
+STALE_SUMMARY_STYLES = {"opacity": STALE_PLOT_STYLES["opacity"]}
 
 
 class PassageView(PlotsView):
@@ -38,7 +43,11 @@ class PassageView(PlotsView):
         self.whatif = whatif
         self._companions = companions
         self.summary = pn.pane.HTML(
-            "", css_classes=["summary-pane"], stylesheets=[ITEMS_CSS], sizing_mode="stretch_width"
+            "",
+            css_classes=["summary-pane"],
+            stylesheets=[ITEMS_CSS],
+            styles=SUMMARY_STYLES,
+            sizing_mode="stretch_width",
         )
         self.soil_summary = pn.pane.HTML(
             "", css_classes=["soil-pane"], stylesheets=[ITEMS_CSS], sizing_mode="stretch_width"
@@ -58,12 +67,25 @@ class PassageView(PlotsView):
     def __panel__(self) -> pn.viewable.Viewable:
         return self._layout
 
+    def mark_stale(self, stages: set[str]) -> None:
+        """Dim the plots that a computing run will change, and the key numbers (each run
+        changes some of them; they follow at its end)."""
+        super().mark_stale(stages)
+        if stages:
+            self.summary.styles = STALE_SUMMARY_STYLES
+
+    def settle(self) -> None:
+        """Undim the plots and the key numbers: the run they waited for failed."""
+        super().settle()
+        self.summary.styles = SUMMARY_STYLES
+
     def show(self, results: Results, redrawn: set[str]) -> None:
         """The plots of the ``redrawn`` stages, the key numbers and the what-if table follow
         ``results``."""
         self._results = results
         self.plots.show(results, redrawn)
         self.summary.object = items_html(plots.summary_items(results), "summary")
+        self.summary.styles = SUMMARY_STYLES
         self.whatif.refresh()
 
     def update_soil_summary(self, soil: Soil) -> None:

@@ -363,6 +363,7 @@ class SessionRuns(param.Parameterized):
         with pn.io.hold(freeze=True):  # one message, the models re-indexed once
             for view in self.views:
                 view.show_stages(early, stages)
+            self._show_progress()  # the status line names the stage computing now
 
     def _note_progress(self, stage: str, fraction: float) -> None:
         """Pipeline progress callback (runs in a worker thread): remember it, or stop the run

@@ -317,11 +317,15 @@ def test_the_first_stages_plots_are_drawn_while_the_soil_stage_computes(dashboar
         for spec in plots.PLOTS:
             during[spec.key] = (streams[spec.key].data, _is_stale(dashboard, spec.key))
         during["summary"] = dashboard.passage.summary.object
+        during["summary dimmed"] = dashboard.passage.summary.styles["opacity"] != "1"
+        during["status"] = dashboard.runs.status.object
 
     _while_the_soil_stage_computes(monkeypatch, look)
     dashboard.inputs.controls["train.speed_kmh"].enter("86")  # a speed no other test runs
     new = dashboard.runs.results
     assert new.scenario.train.speed_kmh == 86.0 and during["summary"] == summary
+    assert during["summary dimmed"]  # the key numbers follow at the end, dimmed till then
+    assert "Computing" in during["status"] and "vehicle–track" not in during["status"]
     for spec in plots.PLOTS:
         shown, stale = during[spec.key]
         early = spec.stage in ("vehicle_track", "load")
@@ -333,6 +337,7 @@ def test_the_first_stages_plots_are_drawn_while_the_soil_stage_computes(dashboar
         assert not _is_stale(dashboard, spec.key)
     assert dashboard.runs.render_counts == dict.fromkeys(STAGES, 2)
     assert dashboard.passage.summary.object != summary
+    assert dashboard.passage.summary.styles["opacity"] == "1"
 
 
 def test_a_run_failing_after_its_first_stages_leaves_the_previous_results_on_every_plot(
@@ -347,6 +352,7 @@ def test_a_run_failing_after_its_first_stages_leaves_the_previous_results_on_eve
     assert "the plots show the previous results" in dashboard.runs.status.object
     for key, stream in _streams(dashboard).items():
         assert stream.data is old and not _is_stale(dashboard, key), key
+    assert dashboard.passage.summary.styles["opacity"] == "1"
     monkeypatch.undo()
     dashboard.inputs.controls["train.speed_kmh"].enter("84")
     new = dashboard.runs.results
