@@ -360,10 +360,14 @@ class SessionRuns(param.Parameterized):
             self._drawn_early[stage] = self._shown_keys.get(stage)
             self._shown_keys[stage] = keys[stage]
             self.render_counts[stage] += 1
-        with pn.io.hold(freeze=True):  # one message, the models re-indexed once
-            for view in self.views:
-                view.show_stages(early, stages)
-            self._show_progress()  # the status line names the stage computing now
+        self._draw_early(early, stages)
+
+    @one_message(reindex_once=True)
+    def _draw_early(self, early: Results, stages: set[str]) -> None:
+        """:meth:`_show_early`'s plots, and the status line brought to the stage computing."""
+        for view in self.views:
+            view.show_stages(early, stages)
+        self._show_progress()
 
     def _note_progress(self, stage: str, fraction: float) -> None:
         """Pipeline progress callback (runs in a worker thread): remember it, or stop the run
