@@ -10,6 +10,7 @@ to the browser as one message.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Callable, Iterable
 
@@ -32,23 +33,65 @@ DrawArguments = Callable[[plots.PlotSpec], dict]
 
 
 def one_message(*, reindex_once: bool = False):
-    """Decorate a page-updating method: its changes reach the browser as one message.
-
-    With ``reindex_once`` the document's models are re-indexed once at the end instead of
-    after each change of a model reference (each re-indexing walks every model of the page).
-    Only for methods that update existing plots: a plot made while the index is frozen misses
-    the page design's Bokeh theme (its title came out small).
-    """
+    """Decorate a page-updating method: its changes reach the browser as one message
+    (:func:`message`)."""
 
     def decorate(method):
         @functools.wraps(method)
         def held(*args, **kwargs):
-            with pn.io.hold(freeze=reindex_once):
+            with message(reindex_once=reindex_once):
                 return method(*args, **kwargs)
 
         return held
 
     return decorate
+
+
+@contextlib.contextmanager
+def message(*, reindex_once: bool = False):
+    """The page changes made inside reach the browser as one message.
+
+    With ``reindex_once`` the document's models are re-indexed at most once, at the end, and
+    only if a model reference changed (:func:`_index_frozen`), instead of after each such
+    change (each re-indexing walks every model of the page). Only for updates of existing
+    plots: a plot made while the index is frozen misses the page design's Bokeh theme (its
+    title came out small).
+    """
+    frozen = _index_frozen(pn.state.curdoc) if reindex_once else contextlib.nullcontext()
+    with frozen, pn.io.hold():
+        yield
+
+
+@contextlib.contextmanager
+def _index_frozen(doc):
+    """Freeze ``doc``'s model index; at the end re-index it only if the changes need it.
+
+    Bokeh re-indexes its document (every model of the page, ~30 ms here) whenever its
+    outermost freeze ends, even after changes of data alone, such as a run's update of the
+    plots. What needs a re-indexing is what Bokeh itself reports or relies on: a change of a
+    model reference (``Model.trigger`` calls ``invalidate``) and a root added or removed (whose
+    re-indexing is left to the end of the freeze). Inside an outer freeze nothing changes.
+    """
+    models = getattr(doc, "models", None)
+    if models is None or models._freeze_count:
+        yield
+        return
+    references_changed = False
+
+    def note_reference_change():
+        nonlocal references_changed
+        references_changed = True
+
+    roots = doc.roots
+    models.invalidate = note_reference_change  # this document's only, while frozen
+    models._freeze_count += 1
+    try:
+        yield
+    finally:
+        models._freeze_count -= 1
+        del models.invalidate
+        if references_changed or doc.roots != roots:
+            models.recompute()
 
 
 def _drawing(spec: plots.PlotSpec, draw_arguments: DrawArguments):

@@ -435,12 +435,12 @@ DEPTH = hv.Dimension("depth", label="Depth below the invert", unit="m")
 PEAK_DISP = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
 
 
-def _depth_curve(results: Results, label: str) -> hv.Curve:
-    """Peak displacement against depth of one run."""
-    soil = results.soil
-    return hv.Curve(
-        (soil.peak_disp_m * MM, soil.depth_m), kdims=[PEAK_DISP], vdims=[DEPTH], label=label
-    ).opts(line_width=2, **_FOLLOW_DATA)
+def _depth_curve(results: Results | None, label: str) -> hv.Curve:
+    """Peak displacement against depth of one run (empty for ``None``)."""
+    profile = ([], []) if results is None else (results.soil.peak_disp_m * MM, results.soil.depth_m)
+    return hv.Curve(profile, kdims=[PEAK_DISP], vdims=[DEPTH], label=label).opts(
+        line_width=2, **_FOLLOW_DATA
+    )
 
 
 MODEL_NAMES = {"2d": "2D section", "2.5d": "2.5D moving load"}
@@ -462,25 +462,30 @@ def depth_profile_plot(
     *,
     overlays: Overlays = (),
     other_model: Results | None = None,
+    other_model_computing: bool = False,
     fe_result: FEResult | None = None,
 ) -> hv.Overlay:
     """Peak dynamic displacement against depth below the invert, with the paper's points;
     pinned runs (``overlays``) are drawn under the current run, ``other_model`` (the same
     scenario with the other tunnel–soil model) as a faint dashed curve, and a stored FE result
-    of the same scenario (``fe_result``, model.fe) as a dotted curve."""
+    of the same scenario (``fe_result``, model.fe) as a dotted curve.
+
+    While the other model's run computes (``other_model_computing``, no ``other_model`` yet)
+    its curve is drawn empty: the legend keeps its entry, so the curve's arrival changes the
+    plot's data and no Bokeh model (no re-indexing of the page, no legend laid out again)."""
     reference = paper_reference() if reference is None else reference
     # the current run is named by its model whether the other model's curve is there or not
-    current_label = (
-        "This model" if results is None else MODEL_NAMES[scenario_of(results).tunnel.model]
-    )
+    model = None if results is None else scenario_of(results).tunnel.model
+    current_label = "This model" if model is None else MODEL_NAMES[model]
+    other_name = None if model is None else MODEL_NAMES[OTHER_MODEL[model]]
     layers = run_layers(_depth_curve, results, current_label, overlays)
-    if other_model is not None:
-        name = MODEL_NAMES[scenario_of(other_model).tunnel.model]
+    computing = other_model is None and other_model_computing
+    if other_name and (other_model is not None or computing):
         # over the pinned runs, under the current run (the dashboard draws the pinned runs as
         # a layer of their own under the rest)
         layers.insert(
             1 if overlays else 0,
-            _depth_curve(other_model, name).opts(
+            _depth_curve(other_model, other_name).opts(
                 color=OTHER_MODEL_COLOUR, line_dash="dashed", line_width=1.5, alpha=0.6
             ),
         )
@@ -504,10 +509,8 @@ def depth_profile_plot(
         layers.append(
             points.opts(color=REFERENCE_COLOUR, marker=marker, size=9, alpha=0.8, **_FOLLOW_DATA)
         )
-    # the other model's curve comes after the results, in place: its legend entry has room
-    arriving = []
-    if other_model is None and results is not None:
-        arriving = [MODEL_NAMES[OTHER_MODEL[scenario_of(results).tunnel.model]]]
+    # without the other model's curve (its run failed) its legend row stays: the same height
+    arriving = [other_name] if other_name and other_model is None and not computing else []
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,

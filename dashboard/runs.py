@@ -29,7 +29,7 @@ from dashboard import plots
 from dashboard.limits import refuse_long_run
 from dashboard.memory import release_soon
 from dashboard.messages import Messages
-from dashboard.plot_panes import one_message
+from dashboard.plot_panes import message, one_message
 from dashboard.scheduler import EXECUTOR, LatestRun, outcome_of
 from model import scenarios
 from model.fe.store import FEResult, stored_fe_result
@@ -243,7 +243,11 @@ class SessionRuns(param.Parameterized):
 
     def depth_companions(self) -> dict:
         """The other tunnel–soil model's results and the stored FE result, for the depth plot."""
-        return {"other_model": self.other_model, "fe_result": self.fe_result}
+        return {
+            "other_model": self.other_model,
+            "other_model_computing": self.comparison_state == "computing",
+            "fe_result": self.fe_result,
+        }
 
     def close(self) -> None:
         """Drop the results of a closed session (telling no watcher: the page is gone) and
@@ -395,10 +399,10 @@ class SessionRuns(param.Parameterized):
 
     def _finish(self, scenario: Scenario, outcome: Outcome | BaseException) -> None:
         """Show a run's results (redrawing only the outputs whose stage changed) or its error,
-        in one message; the models are re-indexed once when every plot exists already (see
-        :func:`~dashboard.plot_panes.one_message`)."""
+        in one message; the models are re-indexed at most once when every plot exists already (see
+        :func:`~dashboard.plot_panes.message`)."""
         in_place = all(view.drawn for view in self.views)
-        with pn.io.hold(freeze=in_place):
+        with message(reindex_once=in_place):
             self._show_outcome(scenario, outcome)
 
     def _show_outcome(self, scenario: Scenario, outcome: Outcome | BaseException) -> None:

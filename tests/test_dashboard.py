@@ -14,6 +14,8 @@ import time
 from concurrent.futures import Future
 from types import SimpleNamespace
 
+import bokeh.models
+import bokeh.plotting
 import holoviews as hv
 import numpy as np
 import panel as pn
@@ -23,7 +25,7 @@ from bokeh.document import Document
 from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
-from dashboard import plots
+from dashboard import plot_panes, plots
 from dashboard import runs as runs_module
 from dashboard.app import Dashboard
 from dashboard.export import main as export_main
@@ -632,6 +634,11 @@ def test_the_other_model_is_computed_after_the_results_are_shown(dashboard, monk
     def watching_compute(other):
         shown_when_called.append(dashboard.runs.results.scenario.soil.youngs_modulus)
         assert dashboard.runs.other_model is None  # the old scenario's curve is gone meanwhile
+        # its legend entry stays, with an empty curve: the curve's arrival changes data only
+        assert (
+            _curves(_shown(dashboard, "depth_profile"))["2.5D moving load"].dimension_values(0).size
+            == 0
+        )
         return compute(other)
 
     monkeypatch.setattr(dashboard.runs.companion, "_compute", watching_compute)
@@ -694,9 +701,49 @@ def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeyp
         monkeypatch.setattr(manager, "recompute", counted)
         board.scenario.train.speed_kmh += 5.0  # a run that redraws every plot
     assert board.runs.results.scenario.train.speed_kmh == cheap_scenario().train.speed_kmh + 5.0
-    # the first stages' plots (drawn while the soil stage computes), the rest of the results,
-    # and the other model's curve after them
-    assert len(indexings) <= 3
+    assert board.runs.comparison_state == "shown"
+    # the first stages' plots (drawn while the soil stage computes), the rest of the results
+    # and the other model's curve after them change data only: no model reference
+    assert indexings == []
+
+
+def test_one_message_reindexes_the_page_when_a_model_reference_changes(monkeypatch):
+    """:func:`plot_panes.message` skips Bokeh's re-indexing after changes of data alone, and
+    re-indexes once when a model was added: by a new reference, or as a root."""
+    figure = bokeh.plotting.figure()
+    line = figure.line([0, 1], [0, 1])
+    session_doc = Document()
+    session_doc.add_root(figure)
+    indexings = []
+    recompute = type(session_doc.models).recompute
+    monkeypatch.setattr(
+        type(session_doc.models),
+        "recompute",
+        lambda models: indexings.append(1) or recompute(models),
+    )
+    with set_curdoc(session_doc):
+        with plot_panes.message(reindex_once=True):
+            line.data_source.data = {"x": [0, 2], "y": [1, 3]}
+            figure.x_range.start = -1.0
+        assert indexings == []
+
+        title = bokeh.models.Title(text="new")
+        with plot_panes.message(reindex_once=True):
+            figure.title = title
+            figure.x_range.end = 5.0
+        assert indexings == [1] and session_doc.get_model_by_id(title.id) is title
+
+        root = bokeh.models.Div(text="another root")
+        with plot_panes.message(reindex_once=True):
+            session_doc.add_root(root)
+        assert indexings == [1, 1] and session_doc.get_model_by_id(root.id) is root
+
+        with session_doc.models.freeze():  # an outer freeze: it re-indexes at its end
+            with plot_panes.message(reindex_once=True):
+                line.data_source.data = {"x": [0], "y": [0]}
+            assert indexings == [1, 1]
+        assert indexings == [1, 1, 1]
+    assert "invalidate" not in vars(session_doc.models)  # Bokeh's own method again
 
 
 def test_a_change_leaves_the_pinned_runs_alone_and_the_axes_cover_them(
