@@ -126,12 +126,13 @@ class Results:
         """The scenario that produced these results."""
         return Scenario.from_json(self.scenario_json)
 
-    def summary(self) -> dict[str, float]:
+    def summary(self, scenario: Scenario | None = None) -> dict[str, float]:
         """Key numbers in SI units (N, N/m, m, m/s, Pa); ``longterm_stress_ratio_max``, the
         largest q_d/σ_s of the long-term column, at or above 1 says that the long-term
-        settlement is outside the strain laws' range."""
+        settlement is outside the strain laws' range. ``scenario``: :attr:`scenario` already
+        parsed, if the caller holds it (parsing takes milliseconds)."""
         vt, soil = self.vehicle_track, self.soil
-        scenario = self.scenario
+        scenario = self.scenario if scenario is None else scenario
         depth, peak = soil.depth_m, soil.peak_disp_m
         return {
             "peak_invert_force_N": float(np.max(vt.block_force_N)),

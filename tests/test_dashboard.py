@@ -5,6 +5,7 @@ pipeline; one stage cache per module keeps repeated stages out of the test time.
 """
 
 import asyncio
+import dataclasses
 import datetime
 import html
 import io
@@ -25,7 +26,7 @@ from bokeh.document import Document
 from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
-from dashboard import plot_panes, plots
+from dashboard import parsed, plot_panes, plots
 from dashboard import runs as runs_module
 from dashboard.app import Dashboard
 from dashboard.export import main as export_main
@@ -169,6 +170,18 @@ def test_depth_plot_overlays_both_paper_series_separately(results):
 def test_reference_data_is_found_from_any_working_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert [s["label"] for s in plots.paper_reference()] == ["Paper Fig. 11", "Paper conclusions"]
+
+
+def test_results_of_the_same_inputs_share_one_parsed_scenario(results):
+    """The first stages' results drawn early and the whole run's share the scenario parsed
+    for the first (each parse takes milliseconds); the summary then parses nothing."""
+    early = dataclasses.replace(results, soil=None, stress=None, longterm=None)
+    assert parsed.scenario_of(early) is parsed.scenario_of(results)
+    assert parsed.scenario_of(results).to_dict() == results.scenario.to_dict()
+    assert parsed.summary_of(results) == results.summary()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Scenario, "from_json", lambda text: pytest.fail("parsed again"))
+        assert results.summary(parsed.scenario_of(results)) == parsed.summary_of(results)
 
 
 def test_summary_items_are_the_summary_in_display_units(results):
