@@ -115,8 +115,11 @@ def _our_tasks(client) -> list[str]:
 def test_rows_equal_in_process_runs_bit_for_bit(cheap_scenario, tmp_path):
     """Each row of a study on a LocalCluster started by run_study (scheduler=None) equals run()
     of the same scenario in this process, every summary number and the depth profile exactly
-    (tolerance 0: the same deterministic code on the same inputs); CSV keeps every bit."""
+    (tolerance 0: the same deterministic code on the same inputs); CSV keeps every bit. The
+    cluster leaves this process's environment as it was (Dask's nannies wrote their workers'
+    thread counts into it)."""
     base = cheap_scenario()
+    environment = dict(os.environ)
     seen = []
     table = run_study(
         base,
@@ -131,6 +134,7 @@ def test_rows_equal_in_process_runs_bit_for_bit(cheap_scenario, tmp_path):
     assert "error" not in table
     assert sorted(seen) == [(1, 4), (2, 4), (3, 4), (4, 4)]
     assert table.attrs["cancelled"] is False
+    assert dict(os.environ) == environment
     depths = [column for _, column in profile_depths(table)]
     for speed, seed in [(90.0, 7), (90.0, 8), (100.0, 7), (100.0, 8)]:
         summary, profile = _in_process_row(base, {"train.speed_kmh": speed}, seed)

@@ -147,16 +147,40 @@ def study_client(
         return
     with (
         dask.config.set({"distributed.worker.multiprocessing-method": worker_start_method()}),
-        LocalCluster(
-            n_workers=n_workers or machine_workers(),
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,  # its Bokeh server would add ~0.6 s to every start
-            silence_logs=logging.ERROR,
-        ) as cluster,
+        _local_cluster(n_workers or machine_workers()) as cluster,
         Client(cluster, set_as_default=False) as client,
     ):
         yield client
+
+
+_ENVIRONMENT_LOCK = threading.Lock()
+
+
+def _local_cluster(n_workers: int) -> LocalCluster:
+    """A started LocalCluster of ``n_workers`` single-threaded worker processes, this process's
+    environment left as it was.
+
+    Each of Dask's nannies writes its worker's variables into this process's ``os.environ``
+    before it starts the worker (one thread for OpenMP, MKL and OpenBLAS, a malloc trim
+    threshold, a hash seed), and leaves them there: every process this one started afterwards
+    (an FE check, another cluster's spawned workers) inherited them. They are put back once the
+    workers run; a nanny that restarts a crashed worker writes them again. Clusters start one
+    at a time, so each sees the environment as it was.
+    """
+    with _ENVIRONMENT_LOCK:
+        environment = dict(os.environ)
+        try:
+            return LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,  # its Bokeh server would add ~0.6 s to every start
+                silence_logs=logging.ERROR,
+            )
+        finally:
+            for name in set(os.environ) - set(environment):
+                del os.environ[name]
+            os.environ.update(environment)
 
 
 def worker_start_method() -> str:
