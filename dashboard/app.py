@@ -207,8 +207,9 @@ class Dashboard(pn.viewable.Viewer):
         self.report_button.disabled = event.new is None
 
     def _on_other_model(self, event: param.parameterized.Event) -> None:
-        """The other tunnel–soil model's results arrived: the depth plot draws its curve."""
-        if event.new is not None:
+        """The other tunnel–soil model's run ended: the depth plot draws its curve, or drops
+        the empty one that held its place if the run failed."""
+        if event.new is not None or self.runs.comparison_state == "unavailable":
             self.passage.redraw_depth_plot()
 
 

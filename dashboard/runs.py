@@ -399,8 +399,8 @@ class SessionRuns(param.Parameterized):
 
     def _finish(self, scenario: Scenario, outcome: Outcome | BaseException) -> None:
         """Show a run's results (redrawing only the outputs whose stage changed) or its error,
-        in one message; the models are re-indexed at most once when every plot exists already (see
-        :func:`~dashboard.plot_panes.message`)."""
+        in one message; the models are re-indexed at most once when every plot exists already
+        (see :func:`~dashboard.plot_panes.message`)."""
         in_place = all(view.drawn for view in self.views)
         with message(reindex_once=in_place):
             self._show_outcome(scenario, outcome)
@@ -471,6 +471,8 @@ class SessionRuns(param.Parameterized):
             return
         self.comparison_state = "unavailable" if outcome is None else "shown"
         self.other_model = outcome  # a new curve: the depth plot is drawn again
+        if outcome is None:  # without the empty curve that held the curve's place
+            self.param.trigger("other_model")
         self.status.object = self._status_html(self.results)
 
     def _status_html(self, results: Results) -> str:

@@ -661,6 +661,26 @@ def test_the_other_model_is_computed_after_the_results_are_shown(dashboard, monk
     assert not dashboard.runs.companion.busy
 
 
+def test_a_failed_comparison_run_leaves_no_legend_entry(cache, cheap_scenario, monkeypatch):
+    """The empty curve that holds the other model's legend entry while its run computes goes
+    when that run fails: the drawn legend names no curve that is not drawn."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()
+        figure = next(iter(board.passage.plots.panes["depth_profile"]._plots.values()))[0].state
+
+        def legend():
+            return {item.label["value"] for legend in figure.legend for item in legend.items}
+
+        assert "2.5D moving load" in legend()
+        monkeypatch.setattr(board.runs.companion, "_compute", lambda other: None)
+        board.scenario.soil.youngs_modulus = 9e6
+    assert board.runs.comparison_state == "unavailable"
+    assert "2D section" in legend() and "2.5D moving load" not in legend()
+
+
 def test_a_comparison_run_of_older_inputs_is_not_drawn(dashboard):
     """A comparison result that no longer matches the inputs on screen is dropped."""
     shown = dashboard.runs.other_model
