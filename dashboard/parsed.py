@@ -1,17 +1,16 @@
 """What the page reads of a run's :class:`~model.pipeline.Results` more than once, computed
-once per Results and dropped with it.
+once: the summary once per Results (dropped with it), the scenario once per inputs.
 
 ``results.scenario`` parses the scenario's JSON anew on each call (6 ms on the paper case), and
 ``results.summary()`` parses it too: one run shown read the scenario seven times and its
-summary twice (the key numbers, the what-if table). A parsed scenario is kept by its JSON text,
-so the results of the same inputs share it.
+summary twice (the key numbers, the what-if table). The last few parsed scenarios are kept by
+their JSON text, so the results of the same inputs share one.
 """
 
 from __future__ import annotations
 
-import threading
+import functools
 import weakref
-from collections import OrderedDict
 from collections.abc import Callable
 from typing import TypeVar
 
@@ -21,14 +20,10 @@ from model.pipeline import Results
 Value = TypeVar("Value")
 
 SCENARIOS_KEPT = 8
-"""Parsed scenarios kept, the most recently read first dropped last."""
+"""Parsed scenarios kept (the least recently read is dropped first)."""
 
 _VALUES: dict[tuple[str, int], object] = {}
 """Computed values by (what, id of their Results), each dropped with its Results."""
-_SCENARIOS: OrderedDict[str, Scenario] = OrderedDict()
-"""Parsed scenarios by their JSON text: the first stages' results drawn early and the whole
-run's results share one (:meth:`dashboard.runs.SessionRuns._show_early`)."""
-_SCENARIOS_LOCK = threading.Lock()
 
 
 def _once(what: str, results: Results, compute: Callable[[Results], Value]) -> Value:
@@ -41,19 +36,15 @@ def _once(what: str, results: Results, compute: Callable[[Results], Value]) -> V
 
 
 def scenario_of(results: Results) -> Scenario:
-    """The scenario of ``results``, to read only (shared by every reader)."""
-    text = results.scenario_json
-    with _SCENARIOS_LOCK:
-        scenario = _SCENARIOS.get(text)
-        if scenario is not None:
-            _SCENARIOS.move_to_end(text)
-            return scenario
-    scenario = Scenario.from_json(text)
-    with _SCENARIOS_LOCK:
-        _SCENARIOS[text] = scenario
-        while len(_SCENARIOS) > SCENARIOS_KEPT:
-            _SCENARIOS.popitem(last=False)
-    return scenario
+    """The scenario of ``results``, to read only (shared by every reader, and by the results of
+    the same inputs: the first stages' results drawn early and the whole run's)."""
+    return _parsed(results.scenario_json)
+
+
+@functools.lru_cache(maxsize=SCENARIOS_KEPT)
+def _parsed(scenario_json: str) -> Scenario:
+    """The scenario of a JSON text, parsed once for all readers."""
+    return Scenario.from_json(scenario_json)
 
 
 def summary_of(results: Results) -> dict[str, float]:
