@@ -163,10 +163,9 @@ def _local_cluster(n_workers: int) -> LocalCluster:
     Each of Dask's nannies writes its worker's variables into this process's ``os.environ``
     before it starts the worker (one thread for OpenMP, MKL and OpenBLAS, a malloc trim
     threshold, a hash seed), and leaves them there: every process this one started afterwards
-    (a script's own subprocesses, a later cluster's spawned workers, which then took the
-    previous workers' hash seed) inherited them. They are put back once the workers run; a
-    nanny that restarts a crashed worker writes them again. Clusters start one at a time, so
-    each sees the environment as it was.
+    (a script's own subprocesses, a later cluster's spawned workers) inherited them. They are
+    put back once the workers run; a nanny that restarts a crashed worker writes them again.
+    Clusters start one at a time, so each sees the environment as it was.
     """
     with _ENVIRONMENT_LOCK:
         environment = dict(os.environ)
