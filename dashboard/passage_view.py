@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import panel as pn
 
-from dashboard import plots
+from dashboard import key_numbers, plots
 from dashboard.plot_panes import STALE_PLOT_STYLES, PlotPanes, PlotsView, one_message
 from dashboard.report import ITEMS_CSS, items_html
 from dashboard.whatif_view import WhatIfPanel
@@ -84,13 +84,13 @@ class PassageView(PlotsView):
         ``results``."""
         self._results = results
         self.plots.show(results, redrawn)
-        self.summary.object = items_html(plots.summary_items(results), "summary")
+        self.summary.object = items_html(key_numbers.summary_items(results), "summary")
         self.summary.styles = SUMMARY_STYLES
         self.whatif.refresh()
 
     def update_soil_summary(self, soil: Soil) -> None:
         """Derived soil quantities of ``soil`` (they follow the inputs, before any run)."""
-        self.soil_summary.object = items_html(plots.soil_items(soil), "soil")
+        self.soil_summary.object = items_html(key_numbers.soil_items(soil), "soil")
 
     def redraw_depth_plot(self) -> None:
         """Draw the depth plot again: its other curves (``companions()``) changed."""

@@ -1,8 +1,10 @@
 """The panes that show a view's plots of a run, and how a run updates them.
 
 Each plot (a :class:`~dashboard.plots.PlotSpec`) sits in a pane inside a box of its own. Its
-first results create a DynamicMap on a stream; later ones are sent through the stream and
-update the Bokeh figure in place, which is far cheaper on both ends than replacing the figure.
+first results create a DynamicMap on a stream; later ones update the Bokeh figure in place,
+which is far cheaper on both ends than replacing the figure: a plot that states its axis
+limits (:mod:`dashboard.axes`) and keeps its layers gets its new data and ranges set on the
+Bokeh models directly (:meth:`PlotPanes._update`), any other through the stream and HoloViews.
 While a run that will change a plot computes, the plot's box is dimmed. :class:`PlotsView` is
 the base of the views whose plots show a run; :func:`one_message` sends a method's page changes
 to the browser as one message.
@@ -15,6 +17,7 @@ import functools
 from collections.abc import Callable, Iterable
 
 import holoviews as hv
+import numpy as np
 import panel as pn
 import param
 from holoviews.streams import Pipe
@@ -94,12 +97,15 @@ def _index_frozen(doc):
             models.recompute()
 
 
-def _drawing(spec: plots.PlotSpec, draw_arguments: DrawArguments):
+def _drawing(spec: plots.PlotSpec, draw_arguments: DrawArguments, drawn: dict):
     """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``), with the
-    keyword arguments ``draw_arguments(spec)`` gives at the time of drawing."""
+    keyword arguments ``draw_arguments(spec)`` gives at the time of drawing; an element drawn
+    already for those results (``drawn[spec.key]``, see :meth:`PlotPanes._update`) is taken
+    instead."""
 
     def callback(data):
-        return spec.draw(data, **draw_arguments(spec))
+        element = drawn.pop(spec.key, None)
+        return spec.draw(data, **draw_arguments(spec)) if element is None else element
 
     return callback
 
@@ -122,6 +128,70 @@ def _pinned_apart(figure: hv.DynamicMap) -> hv.DynamicMap:
         lambda drawn: hv.Overlay([x for x in drawn if not isinstance(x, plots.PinnedRuns)])
     )
     return (pinned[0] * rest).apply(lambda combined: combined.clone(id=figure.last.id))
+
+
+class ResultsPipe(Pipe):
+    """The stream of a plot's Results; :meth:`hold` changes them without drawing."""
+
+    def hold(self, data) -> None:
+        """Keep ``data`` as what the plot shows (its figure was updated apart): a later
+        evaluation of the DynamicMap draws it, not its last drawn element."""
+        self.update(data=data)
+        self._on_trigger()  # a new memoization key, as a sent event makes
+
+
+def _layer_pairs(plot, element: hv.Element) -> list[tuple] | None:
+    """The layers of ``element`` paired with the subplots of the drawn HoloViews ``plot``
+    that show them, as ``(layer, subplot, source, columns)``; None unless each layer can be
+    shown by setting its subplot's Bokeh source: the same layers in the same order, each of
+    the same type, label and dimensions (a plot's styles and legend follow from its layers'
+    labels). A layer identical to the one shown (the pinned runs) is left out."""
+    layers = list(element) if isinstance(element, hv.Overlay) else [element]
+    subplots = list(plot.subplots.values()) if isinstance(element, hv.Overlay) else [plot]
+    if len(layers) != len(subplots):
+        return None
+    pairs = []
+    for layer, subplot in zip(layers, subplots, strict=True):
+        shown = subplot.current_frame
+        if shown is layer:
+            continue
+        source = subplot.handles.get("source")
+        columns = [dimension.name for dimension in layer.dimensions()]
+        if not (
+            type(shown) is type(layer)
+            and (shown.label, shown.kdims, shown.vdims) == (layer.label, layer.kdims, layer.vdims)
+            and source is not None
+            and sorted(source.data) == sorted(columns)
+        ):
+            return None
+        pairs.append((layer, subplot, source, columns))
+    return pairs
+
+
+def _set_data(pairs: list[tuple]) -> None:
+    """Set each layer's data on its Bokeh source (:func:`_layer_pairs`), where it changed
+    (the paper's points stay as they are)."""
+    for layer, _, source, columns in pairs:
+        data = {name: layer.dimension_values(name) for name in columns}
+        if any(not np.array_equal(source.data[name], data[name]) for name in columns):
+            source.data = data
+
+
+def _stated_limits(element: hv.Element) -> dict:
+    """The axis limits ``element`` states (``xlim``, ``ylim``: :mod:`dashboard.axes`)."""
+    options = hv.Store.lookup_options("bokeh", element, "plot").kwargs
+    return {name: options[name] for name in ("xlim", "ylim") if name in options}
+
+
+def _set_ranges(plot, limits: dict) -> None:
+    """Set the figure's axis ranges to ``limits`` (:func:`_stated_limits`), as HoloViews'
+    update of a plot whose layers follow their data (``framewise``) sets them."""
+    for axis, name, inverted in (("x_range", "xlim", False), ("y_range", "ylim", True)):
+        if name in limits:
+            start, end = limits[name]
+            if inverted and plot.invert_yaxis:
+                start, end = end, start
+            plot.handles[axis].update(start=start, end=end, reset_start=start, reset_end=end)
 
 
 class PlotPanes:
@@ -166,8 +236,10 @@ class PlotPanes:
             for key, pane in self.panes.items()
         }
         """Per plot, the box around its pane (flex item; dimmed while the plot is stale)."""
-        self.streams: dict[str, Pipe] = {}
+        self.streams: dict[str, ResultsPipe] = {}
         """Per plot, the stream holding the Results it shows (sent only when its stage changed)."""
+        self._drawn: dict[str, hv.Element] = {}
+        """Per plot, an element drawn for the Results its stream is about to send."""
 
     def flexbox(self) -> pn.FlexBox:
         """The plots' boxes in one row that wraps in a narrow window."""
@@ -198,11 +270,10 @@ class PlotPanes:
         undim them; the other plots are left as they are."""
         for spec in self.specs:
             if spec.stage in stages:
-                stream = self.streams.get(spec.key)
-                if stream is None:
-                    self._new_plot(spec, results)
+                if spec.key in self.streams:
+                    self._update(spec, results)
                 else:
-                    stream.send(results)
+                    self._new_plot(spec, results)
                 self._set_stale(spec.key, False)
 
     def settle(self) -> None:
@@ -228,9 +299,9 @@ class PlotPanes:
 
     def send(self, key: str, results: Results) -> None:
         """Draw the plot ``key`` again, of ``results`` (if it exists)."""
-        stream = self.streams.get(key)
-        if stream is not None:
-            stream.send(results)
+        for spec in self.specs:
+            if spec.key == key and key in self.streams:
+                self._update(spec, results)
 
     def close(self) -> None:
         """Drop the plots of a closed session, without a word to its page: its models may be
@@ -243,10 +314,33 @@ class PlotPanes:
 
     def _new_plot(self, spec: plots.PlotSpec, results: Results) -> None:
         """A new plot of ``results``; its stream then updates it in place."""
-        stream = self.streams[spec.key] = Pipe(data=results)
+        stream = self.streams[spec.key] = ResultsPipe(data=results)
         self.panes[spec.key].object = _pinned_apart(
-            hv.DynamicMap(_drawing(spec, self._draw_arguments), streams=[stream])
+            hv.DynamicMap(_drawing(spec, self._draw_arguments, self._drawn), streams=[stream])
         )
+
+    def _update(self, spec: plots.PlotSpec, results: Results) -> None:
+        """Draw ``results`` in the existing plot of ``spec``: its data and axis ranges set on
+        its Bokeh models directly where the new element states both axis limits and
+        :func:`_layer_pairs` finds the layers shown, else through its stream (HoloViews draws
+        it again and updates the figure)."""
+        stream = self.streams[spec.key]
+        figures = [plot for plot, _ in self.panes[spec.key]._plots.values()]
+        if not figures:  # not on a page yet (a tab not opened): HoloViews draws it when shown
+            stream.send(results)
+            return
+        element = spec.draw(results, **self._draw_arguments(spec))
+        limits = _stated_limits(element)
+        # without both limits the ranges would need HoloViews' ranging of the data
+        pairs = [_layer_pairs(plot, element) for plot in figures] if len(limits) == 2 else [None]
+        if all(found is not None for found in pairs):
+            for plot, found in zip(figures, pairs, strict=True):
+                _set_data(found)
+                _set_ranges(plot, limits)
+            stream.hold(results)
+        else:
+            self._drawn[spec.key] = element  # HoloViews' callback takes it, not drawing again
+            stream.send(results)
 
     def _set_stale(self, key: str, stale: bool) -> None:
         """Dim a drawn plot that a run will change (undim it when drawn); a plot not drawn yet

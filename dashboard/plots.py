@@ -7,6 +7,7 @@ reader expects (mm, kN, kN/m) and every axis label states its unit.
 
 from __future__ import annotations
 
+import functools
 import json
 import weakref
 from collections.abc import Callable, Sequence
@@ -17,10 +18,11 @@ import holoviews as hv
 import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used below)
 import numpy as np
 
-from dashboard.parsed import scenario_of, summary_of
+from dashboard.axes import axis_limits
+from dashboard.parsed import scenario_of
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.fe.store import FEResult
-from model.params import DATA_DIR, Soil
+from model.params import DATA_DIR
 from model.pipeline import Results
 
 REFERENCE_FILE = DATA_DIR / "paper_reference.json"
@@ -173,16 +175,16 @@ def decimate_min_max(
     return x[keep], y[keep]
 
 
-def _time_curve(t_s, values, label, value_dim, scale):
-    """Decimated time-history curve with a labelled value dimension."""
+def _time_curve(t_s, values, label, value_dim, scale, **style):
+    """Decimated time-history curve with a labelled value dimension, in ``style``."""
     t, v = decimate_min_max(np.asarray(t_s), np.asarray(values) * scale)
     return hv.Curve(
         (t, v), kdims=[hv.Dimension("t", label="Time", unit="s")], vdims=[value_dim], label=label
-    ).opts(**_FOLLOW_DATA)
+    ).opts(**_FOLLOW_DATA, **style)
 
 
 def run_layers(
-    layer: Callable[[Results, str], hv.Element],
+    layer: Callable[..., hv.Element],
     results: Results | None,
     label: str,
     overlays: Overlays = (),
@@ -191,8 +193,8 @@ def run_layers(
 
     Parameters
     ----------
-    layer : callable(results, label) -> Curve
-        Draws one run's curve.
+    layer : callable(results, label, **style) -> Curve
+        Draws one run's curve (in the line ``style`` given, else its own).
     results : Results or None
         The current run (None: only the pinned runs, e.g. a report of a saved session).
     label : str
@@ -204,8 +206,11 @@ def run_layers(
     current = []
     if results is not None:
         current = [
-            layer(results, CURRENT_LABEL if overlays else label).opts(
-                color=CURRENT_COLOUR, line_width=CURRENT_LINE_WIDTH
+            layer(
+                results,
+                CURRENT_LABEL if overlays else label,
+                color=CURRENT_COLOUR,
+                line_width=CURRENT_LINE_WIDTH,
             )
         ]
     if not overlays:
@@ -309,8 +314,20 @@ def _thinned(element: hv.Element) -> hv.Element:
     return element.clone((x, y))
 
 
-def _overlaid(layers: list[hv.Element], overlays: Overlays, **opts) -> hv.Element:
-    """The current run's layer alone, or with pinned runs an Overlay with its legend outside."""
+CURVE_PADDING = (0.0, 0.1)
+"""Axis padding (x, y) of the time histories and PSDs (:func:`~dashboard.axes.axis_limits`):
+the time axis ends at the record's ends, the frequency axis at the computed frequencies."""
+DEPTH_PADDING = (0.05, 0.05)
+"""Axis padding (x, y) of the depth profile: the points at the invert and the deepest depth
+stay clear of the frame."""
+
+
+def _overlaid(
+    layers: list[hv.Element], overlays: Overlays, *, logy: bool = False, **opts
+) -> hv.Element:
+    """The current run's layer alone, or with pinned runs an Overlay with its legend outside;
+    its axes cover every layer (:data:`CURVE_PADDING`)."""
+    opts.update(axis_limits(layers, CURVE_PADDING, logy=logy), logy=logy)
     if not overlays:
         return layers[0].opts(**opts, **PLOT_OPTIONS)
     return hv.Overlay(layers).opts(**opts, **_with_legend(layers, overlays))
@@ -339,10 +356,10 @@ def _with_legend(layers: list[hv.Element], overlays: Overlays, also: Sequence[st
 BLOCK_DISP = hv.Dimension("block_disp", label="Displacement, down +", unit="mm")
 
 
-def _block_disp_curve(results: Results, label: str) -> hv.Curve:
+def _block_disp_curve(results: Results, label: str, **style) -> hv.Curve:
     """Simulated block displacement of one run."""
     vt = results.vehicle_track
-    return _time_curve(vt.t_s, vt.block_disp_m, label, BLOCK_DISP, MM).opts(line_width=1.5)
+    return _time_curve(vt.t_s, vt.block_disp_m, label, BLOCK_DISP, MM, **style)
 
 
 def block_displacement_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Overlay:
@@ -352,20 +369,28 @@ def block_displacement_plot(results: Results | None, *, overlays: Overlays = ())
     if results is not None:
         vt = results.vehicle_track
         winkler = _time_curve(
-            vt.t_s, vt.winkler_block_disp_m, "Winkler beam (BOEF)", BLOCK_DISP, MM
+            vt.t_s,
+            vt.winkler_block_disp_m,
+            "Winkler beam (BOEF)",
+            BLOCK_DISP,
+            MM,
+            color=REFERENCE_LINE_COLOUR,
+            line_dash="dashed",
+            line_width=2,
         )
-        layers.append(winkler.opts(color=REFERENCE_LINE_COLOUR, line_dash="dashed", line_width=2))
+        layers.append(winkler)
     return hv.Overlay(layers).opts(
         title="Sleeper (block) displacement",
         **_with_legend(layers, overlays),
+        **axis_limits(layers, CURVE_PADDING),
     )
 
 
-def _invert_load_curve(results: Results, label: str) -> hv.Curve:
+def _invert_load_curve(results: Results, label: str, **style) -> hv.Curve:
     """Force into the invert under the monitored block of one run."""
     force = hv.Dimension("block_force", label="Force into the invert per block", unit="kN")
     vt = results.vehicle_track
-    return _time_curve(vt.t_s, vt.block_force_N, label, force, KN)
+    return _time_curve(vt.t_s, vt.block_force_N, label, force, KN, **style)
 
 
 def invert_load_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Curve | hv.Overlay:
@@ -381,9 +406,9 @@ numerical floor (down to 1e-18 of the peak on the paper case), which left the ph
 top half of the plot. The curve continues below the axis (cut by it, not removed)."""
 
 
-def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
+def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz, **style):
     """Log-scale PSD curve from 0 to ``max_frequency_hz`` with its axis :data:`PSD_DECADES`
-    deep; zero bins are left out of the log."""
+    deep, in ``style``; zero bins are left out of the log."""
     f = np.asarray(f_hz)
     p = np.asarray(psd) * scale
     keep = (f > 0) & (f <= max_frequency_hz) & (p > 0)
@@ -393,14 +418,14 @@ def _psd_curve(f_hz, psd, value_dim, scale, label, max_frequency_hz):
         kdims=[hv.Dimension("f", label="Frequency", unit="Hz")],
         vdims=[value_dim.clone(range=(floor, None))],
         label=label,
-    ).opts(**_FOLLOW_DATA)
+    ).opts(**_FOLLOW_DATA, **style)
 
 
-def _load_psd_curve(results: Results, label: str) -> hv.Curve:
+def _load_psd_curve(results: Results, label: str, **style) -> hv.Curve:
     """Line-load PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("load_psd", label="PSD", unit="(kN/m)²/Hz")
     top = scenario_of(results).numerics.soil_max_frequency
-    return _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, label, top)
+    return _psd_curve(results.load.f_hz, results.load.psd, dim, KN**2, label, top, **style)
 
 
 def load_psd_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Curve | hv.Overlay:
@@ -409,11 +434,12 @@ def load_psd_plot(results: Results | None, *, overlays: Overlays = ()) -> hv.Cur
     return _overlaid(layers, overlays, title="Invert line-load PSD", logy=True)
 
 
-def _interface_psd_curve(results: Results, label: str) -> hv.Curve:
+def _interface_psd_curve(results: Results, label: str, **style) -> hv.Curve:
     """Interface displacement PSD of one run up to its soil frequency limit."""
     dim = hv.Dimension("interface_psd", label="PSD", unit="mm²/Hz")
     top = scenario_of(results).numerics.soil_max_frequency
-    return _psd_curve(results.soil.f_hz, results.soil.interface_psd, dim, MM**2, label, top)
+    soil = results.soil
+    return _psd_curve(soil.f_hz, soil.interface_psd, dim, MM**2, label, top, **style)
 
 
 def interface_psd_plot(
@@ -435,11 +461,27 @@ DEPTH = hv.Dimension("depth", label="Depth below the invert", unit="m")
 PEAK_DISP = hv.Dimension("peak_disp", label="Peak dynamic displacement", unit="mm")
 
 
-def _depth_curve(results: Results | None, label: str) -> hv.Curve:
-    """Peak displacement against depth of one run (empty for ``None``)."""
+@functools.cache
+def _paper_points() -> tuple[hv.Scatter, ...]:
+    """The paper's points of :func:`paper_reference` (fixed data: made once, and a plot
+    updated in place finds the same elements and leaves them alone)."""
+    markers = ("circle", "triangle", "square", "diamond")
+    return tuple(
+        hv.Scatter(
+            (np.asarray(series["peak_disp_m"]) * MM, series["depth_m"]),
+            kdims=[PEAK_DISP],
+            vdims=[DEPTH],
+            label=series["label"],
+        ).opts(color=REFERENCE_COLOUR, marker=marker, size=9, alpha=0.8, **_FOLLOW_DATA)
+        for series, marker in zip(paper_reference(), markers, strict=False)
+    )
+
+
+def _depth_curve(results: Results | None, label: str, **style) -> hv.Curve:
+    """Peak displacement against depth of one run (empty for ``None``), in ``style``."""
     profile = ([], []) if results is None else (results.soil.peak_disp_m * MM, results.soil.depth_m)
     return hv.Curve(profile, kdims=[PEAK_DISP], vdims=[DEPTH], label=label).opts(
-        line_width=2, **_FOLLOW_DATA
+        **{"line_width": 2, **_FOLLOW_DATA, **style}
     )
 
 
@@ -458,7 +500,6 @@ FE_LAW_NAMES = {"elastic": "elastic", "mohr_coulomb": "Mohr–Coulomb"}
 
 def depth_profile_plot(
     results: Results | None,
-    reference: list[dict] | None = None,
     *,
     overlays: Overlays = (),
     other_model: Results | None = None,
@@ -473,7 +514,6 @@ def depth_profile_plot(
     While the other model's run computes (``other_model_computing``, no ``other_model`` yet)
     its curve is drawn empty: the legend keeps its entry, so the curve's arrival changes the
     plot's data and no Bokeh model (no re-indexing of the page, no legend laid out again)."""
-    reference = paper_reference() if reference is None else reference
     # the current run is named by its model whether the other model's curve is there or not
     model = None if results is None else scenario_of(results).tunnel.model
     current_label = "This model" if model is None else MODEL_NAMES[model]
@@ -485,8 +525,13 @@ def depth_profile_plot(
         # a layer of their own under the rest)
         layers.insert(
             1 if overlays else 0,
-            _depth_curve(other_model, other_name).opts(
-                color=OTHER_MODEL_COLOUR, line_dash="dashed", line_width=1.5, alpha=0.6
+            _depth_curve(
+                other_model,
+                other_name,
+                color=OTHER_MODEL_COLOUR,
+                line_dash="dashed",
+                line_width=1.5,
+                alpha=0.6,
             ),
         )
     if fe_result is not None:
@@ -498,24 +543,14 @@ def depth_profile_plot(
                 label=f"FE section ({FE_LAW_NAMES[fe_result.soil_law]})",
             ).opts(color=FE_COLOUR, line_dash="dotted", line_width=2, **_FOLLOW_DATA)
         )
-    markers = ("circle", "triangle", "square", "diamond")
-    for series, marker in zip(reference, markers, strict=False):
-        points = hv.Scatter(
-            (np.asarray(series["peak_disp_m"]) * MM, series["depth_m"]),
-            kdims=[PEAK_DISP],
-            vdims=[DEPTH],
-            label=series["label"],
-        )
-        layers.append(
-            points.opts(color=REFERENCE_COLOUR, marker=marker, size=9, alpha=0.8, **_FOLLOW_DATA)
-        )
+    layers += _paper_points()
     # without the other model's curve (its run failed) its legend row stays: the same height
     arriving = [other_name] if other_name and other_model is None and not computing else []
     return hv.Overlay(layers).opts(
         title="Peak dynamic displacement against depth",
         invert_yaxis=True,
         **_with_legend(layers, overlays, also=arriving),
-        padding=0.05,
+        **axis_limits(layers, DEPTH_PADDING),
     )
 
 
@@ -527,74 +562,3 @@ PLOTS = (
     PlotSpec("depth_profile", "soil", depth_profile_plot),
 )
 """Every plot of the dashboard and the report, in display order, with the stage it reads."""
-
-
-@dataclass(frozen=True)
-class SummaryItem:
-    """One key number: a stable key, a label, the value in display units and the unit."""
-
-    key: str
-    label: str
-    value: float
-    unit: str
-
-    @property
-    def text(self) -> str:
-        """Value with three significant digits and its unit."""
-        return f"{significant(self.value)} {self.unit}"
-
-
-def significant(value: float, digits: int = 3) -> str:
-    """``value`` to ``digits`` significant digits, trailing zeros kept (0.497, 7.90, 19.9),
-    whole numbers of more digits in full (1234), never in exponent form below 1e6."""
-    if not np.isfinite(value) or value == 0 or abs(value) >= 1e6 or abs(value) < 1e-4:
-        return f"{value:.{digits}g}"
-    if abs(value) >= 10 ** (digits - 1):
-        return f"{value:.0f}"
-    return f"{value:#.{digits}g}"
-
-
-def summary_items(results: Results) -> list[SummaryItem]:
-    """Key numbers of a run in display units, from :meth:`Results.summary`."""
-    s = summary_of(results)
-    deepest = s["deepest_depth_m"]
-    return [
-        SummaryItem(
-            "peak_invert_force", "Peak invert load (one block)", s["peak_invert_force_N"] * KN, "kN"
-        ),
-        SummaryItem(
-            "peak_line_load",
-            "Peak line load on the section",
-            s["peak_line_load_N_per_m"] * KN,
-            "kN/m",
-        ),
-        SummaryItem(
-            "peak_block_disp", "Peak sleeper displacement", s["peak_block_disp_m"] * MM, "mm"
-        ),
-        SummaryItem(
-            "peak_disp_invert",
-            "Peak dynamic displacement at the invert",
-            s["peak_disp_invert_m"] * MM,
-            "mm",
-        ),
-        SummaryItem("peak_disp_11m", "… 11 m below the invert", s["peak_disp_11m_m"] * MM, "mm"),
-        SummaryItem(
-            "peak_disp_deepest",
-            f"… {deepest:g} m below the invert",
-            s["peak_disp_deepest_m"] * MM,
-            "mm",
-        ),
-        SummaryItem(
-            "min_wheel_force", "Lowest wheel–rail force", s["min_wheel_force_N"] * KN, "kN"
-        ),
-    ]
-
-
-def soil_items(soil: Soil) -> list[SummaryItem]:
-    """Derived soil quantities c1, c2, λ, μ of a soil, in display units (m/s, MPa)."""
-    return [
-        SummaryItem("soil_p_wave_speed", "P-wave speed c1", soil.p_wave_speed, "m/s"),
-        SummaryItem("soil_s_wave_speed", "S-wave speed c2", soil.s_wave_speed, "m/s"),
-        SummaryItem("soil_lame_lambda", "Lamé λ", soil.lame_lambda * 1e-6, "MPa"),
-        SummaryItem("soil_shear_modulus", "Shear modulus μ", soil.shear_modulus * 1e-6, "MPa"),
-    ]

@@ -23,7 +23,7 @@ from bokeh.resources import INLINE
 from panel.io.resources import CDN_DIST, DIST_DIR, set_resource_mode
 from panel.io.state import set_curdoc
 
-from dashboard import plots
+from dashboard import key_numbers, plots
 from dashboard.controls import clean_number, format_value
 from dashboard.ground_view import GROUND_PLOTS, ground_statement
 from dashboard.longterm_view import LONGTERM_PLOTS, law_statement
@@ -36,7 +36,7 @@ REPORT_TITLE = "tunnelsettle report"
 _OFFLINE_TEMPLATE_VARIABLES = {"app_favicon": "", "apple_icon": ""}
 
 
-def items_html(items: list[plots.SummaryItem], css_class: str) -> str:
+def items_html(items: list[key_numbers.SummaryItem], css_class: str) -> str:
     """HTML block of labelled key numbers; each value carries ``data-key`` for tests."""
     cells = "".join(
         f'<div class="item"><div class="label">{html.escape(item.label)}</div>'
@@ -146,9 +146,9 @@ def build_report(
         "positive downward. Tunnel–soil model: "
         + f"<b>{plots.MODEL_NAMES[scenario.tunnel.model]}</b>.</p>"
         "<h3>Key numbers</h3>"
-        + items_html(plots.summary_items(results), "summary")
+        + items_html(key_numbers.summary_items(results), "summary")
         + "<h3>Derived soil quantities</h3>"
-        + items_html(plots.soil_items(scenario.soil), "soil")
+        + items_html(key_numbers.soil_items(scenario.soil), "soil")
         + warning_block,
         stylesheets=[ITEMS_CSS],
         sizing_mode="stretch_width",

@@ -26,7 +26,7 @@ from bokeh.document import Document
 from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
-from dashboard import parsed, plot_panes, plots
+from dashboard import key_numbers, parsed, plot_panes, plots
 from dashboard import runs as runs_module
 from dashboard.app import Dashboard
 from dashboard.export import main as export_main
@@ -186,12 +186,12 @@ def test_results_of_the_same_inputs_share_one_parsed_scenario(results):
 
 def test_summary_items_are_the_summary_in_display_units(results):
     summary = results.summary()
-    items = {item.key: item for item in plots.summary_items(results)}
+    items = {item.key: item for item in key_numbers.summary_items(results)}
     assert items["peak_block_disp"].value == summary["peak_block_disp_m"] * MM
     assert items["peak_invert_force"].value == summary["peak_invert_force_N"] / 1e3
     assert items["peak_disp_11m"].value == summary["peak_disp_11m_m"] * MM
     assert items["peak_disp_deepest"].label == "… 35 m below the invert"
-    soil = {item.key: item for item in plots.soil_items(results.scenario.soil)}
+    soil = {item.key: item for item in key_numbers.soil_items(results.scenario.soil)}
     assert soil["soil_s_wave_speed"].value == results.scenario.soil.s_wave_speed
     assert soil["soil_shear_modulus"].unit == "MPa"
 
@@ -740,6 +740,93 @@ def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeyp
     assert indexings == []
 
 
+def _figure_content(figure) -> dict:
+    """What a Bokeh figure shows: every glyph's data (lists), in drawing order, and its axis
+    ranges."""
+
+    def listed(values):
+        return (
+            [listed(v) for v in values] if isinstance(values, list) else np.asarray(values).tolist()
+        )
+
+    return {
+        "data": [
+            {name: listed(values) for name, values in renderer.data_source.data.items()}
+            for renderer in figure.renderers
+        ],
+        "x": (figure.x_range.start, figure.x_range.end),
+        "y": (figure.y_range.start, figure.y_range.end),
+    }
+
+
+@pytest.mark.parametrize("pinned", [False, True], ids=["alone", "with a pinned run"])
+def test_a_run_updates_each_passage_plot_in_place_as_a_fresh_drawing_shows_it(
+    cache, cheap_scenario, monkeypatch, pinned
+):
+    """A speed change sets the passage plots' data and ranges on their Bokeh models, without
+    HoloViews' update of the plot, and each figure then shows exactly what a new drawing of
+    the new results shows (its data, the paper's points, the pinned run, the other model's
+    curve once it came, the axis ranges, inverted on the depth plot)."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()
+        if pinned:
+            board.whatif.pin_button.clicks += 1
+        drawn = {
+            key: next(iter(pane._plots.values()))[0]
+            for key, pane in board.passage.plots.panes.items()
+        }
+        before = {key: _figure_content(plot.state) for key, plot in drawn.items()}
+        redrawn_by_holoviews = []
+        for plot in drawn.values():
+            monkeypatch.setattr(
+                plot, "update_frame", lambda *a, **k: redrawn_by_holoviews.append(a)
+            )
+        board.scenario.train.speed_kmh += 20.0
+    assert board.runs.comparison_state == "shown"
+    assert not redrawn_by_holoviews
+    for spec in plots.PLOTS:
+        figure = drawn[spec.key].state
+        assert next(iter(board.passage.plots.panes[spec.key]._plots.values()))[0].state is figure
+        arguments = board.passage._draw_arguments(spec)
+        fresh = hv.render(spec.draw(board.runs.results, **arguments), backend="bokeh")
+        shown = _figure_content(figure)
+        assert shown == _figure_content(fresh), spec.key
+        assert shown != before[spec.key], spec.key
+
+
+def test_a_plot_whose_layers_change_is_drawn_again_by_holoviews(cache, cheap_scenario):
+    """A stored FE result adds a curve to the depth plot: no update in place can show it, so
+    HoloViews draws the plot again (with the element drawn already), and the axes cover the
+    new curve, far beyond the old range."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()
+        plot = next(iter(board.passage.plots.panes["depth_profile"]._plots.values()))[0]
+        depth = board.runs.results.soil.depth_m
+        far = 10.0 * board.runs.results.soil.peak_disp_m.max()
+        fe = SimpleNamespace(
+            peak_disp_m=np.full(depth.size, far), depth_m=depth, soil_law="elastic"
+        )
+        board.runs.fe_result = fe
+        board.passage.redraw_depth_plot()
+    legend = {item.label["value"] for legend in plot.state.legend for item in legend.items}
+    assert "FE section (elastic)" in legend
+    assert not board.passage.plots._drawn  # the element drawn for the check was used
+    assert plot.state.x_range.end > far * plots.MM
+    spec = next(spec for spec in plots.PLOTS if spec.key == "depth_profile")
+    arguments = board.passage._draw_arguments(spec)
+    fresh = _figure_content(hv.render(spec.draw(board.runs.results, **arguments), backend="bokeh"))
+    shown = _figure_content(plot.state)
+    # the same curves; HoloViews draws the one it added last, on top
+    assert sorted(map(repr, shown.pop("data"))) == sorted(map(repr, fresh.pop("data")))
+    assert shown == fresh
+
+
 def test_one_message_reindexes_the_page_when_a_model_reference_changes(monkeypatch):
     """:func:`plot_panes.message` skips Bokeh's re-indexing after changes of data alone, and
     re-indexes once when a model was added: by a new reference, or as a root."""
@@ -932,7 +1019,7 @@ def test_report_is_self_contained_and_complete(results):
         assert title in text, title
     shown = "".join(_markup_texts(text))
     assert SETTLEMENT_COVERS in shown  # issue 25: what the long-term settlement covers
-    for item in plots.summary_items(results):
+    for item in key_numbers.summary_items(results):
         assert f'data-key="{item.key}">{item.text}<' in shown
     assert html.escape(results.scenario_json) in shown  # the full scenario, as <pre> text
 

@@ -14,7 +14,7 @@ import param
 import pytest
 from holoviews.streams import Pipe
 
-from dashboard import plots
+from dashboard import axes, key_numbers, plots
 from dashboard.app import Dashboard
 from dashboard.report import build_report, inputs_html
 from dashboard.study_plots import band_plot, depth_envelope_plot, partial_note, study_bands
@@ -63,7 +63,9 @@ def test_typed_text_is_refused_with_the_reason(text, unit, reason):
 
 
 def test_key_numbers_show_three_significant_digits():
-    shown = [plots.significant(v) for v in (0.49731, 7.899, 19.92, 66.39, 1234.6, 0.0, 2.5e-6)]
+    shown = [
+        key_numbers.significant(v) for v in (0.49731, 7.899, 19.92, 66.39, 1234.6, 0.0, 2.5e-6)
+    ]
     assert shown == ["0.497", "7.90", "19.9", "66.4", "1235", "0", "2.5e-06"]
 
 
@@ -162,6 +164,64 @@ def test_the_psd_axis_spans_ten_decades_below_the_peak(cheap_results):
     low, high = psd.vdims[0].range
     assert high is None
     assert low == pytest.approx(psd.dimension_values(1).max() * 1e-10, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("low", "high", "padding", "log", "floor", "expected"),
+    [
+        (0.0, 10.0, 0.1, False, None, (-1.0, 11.0)),
+        (2.0, 4.0, 0.0, False, None, (2.0, 4.0)),  # a time axis: the record's ends
+        (1e-3, 1e1, 0.25, True, None, (1e-4, 1e2)),  # 4 decades, a decade more at each end
+        (1e-18, 5.0, 0.1, True, 5e-10, (5e-10, 50.0)),  # the floor: only the top is padded
+        (3.0, 3.0, 0.1, False, None, (2.7, 3.3)),  # one value: ±10 %, as HoloViews does
+        (0.0, 0.0, 0.1, False, None, (-0.5, 0.5)),
+        (np.inf, -np.inf, 0.1, False, None, None),  # no data
+        (-1.0, 2.0, 0.1, True, None, None),  # a log axis reaching 0 without a floor
+    ],
+)
+def test_an_axis_covers_its_data_with_the_stated_padding(low, high, padding, log, floor, expected):
+    limits = axes.padded_range(low, high, padding, log=log, floor=floor)
+    if expected is None:
+        assert limits is None
+    else:
+        assert limits == pytest.approx(expected, rel=1e-12)
+
+
+def test_the_axis_limits_cover_every_layer_and_the_lowest_floor():
+    """Along x and y the union of the layers' extents; a PSD's y axis starts at the lowest of
+    its curves' floors; an empty layer (the other model's curve while it computes) counts for
+    nothing."""
+    psd = hv.Dimension("psd", range=(1e-9, None))
+    layers = [
+        hv.Curve(([1.0, 2.0], [1e-3, 1.0]), vdims=[psd]),
+        hv.Curve(([0.5, 4.0], [1e-2, 0.1]), vdims=[psd.clone(range=(1e-11, None))]),
+        hv.Curve(([], [])),
+    ]
+    limits = axes.axis_limits(layers, (0.0, 0.1), logy=True)
+    assert limits["xlim"] == pytest.approx((0.5, 4.0), rel=1e-12)
+    assert limits["ylim"] == pytest.approx((1e-11, 10.0**1.1), rel=1e-12)
+    assert axes.axis_limits([hv.Curve(([], []))], (0.1, 0.1)) == {}
+
+
+def test_each_passage_plot_states_the_limits_of_its_data(cheap_results):
+    """The passage plots carry their axis limits (what an update in place sets again): the
+    time axis ends at the record's ends, with or without a pinned run (HoloViews padded it
+    by 10 % once a run was pinned), and the depth axis is inverted around 0–deepest."""
+    pinned = [("pinned", cheap_results, "#E69F00")]
+    for spec in plots.PLOTS:
+        for overlays in ((), pinned):
+            element = spec.draw(cheap_results, overlays=overlays)
+            limits = hv.Store.lookup_options("bokeh", element, "plot").kwargs
+            assert {"xlim", "ylim"} <= set(limits), spec.key
+    vt = cheap_results.vehicle_track
+    for overlays in ((), pinned):
+        element = plots.block_displacement_plot(cheap_results, overlays=overlays)
+        xlim = hv.Store.lookup_options("bokeh", element, "plot").kwargs["xlim"]
+        assert xlim == pytest.approx((vt.t_s[0], vt.t_s[-1]), rel=1e-12)
+    figure = hv.render(plots.depth_profile_plot(cheap_results), backend="bokeh")
+    deepest = cheap_results.soil.depth_m.max()
+    pad = plots.DEPTH_PADDING[1] * deepest
+    assert (figure.y_range.start, figure.y_range.end) == pytest.approx((deepest + pad, -pad))
 
 
 def test_the_report_has_the_other_model_and_the_inputs_in_engineering_units(cheap_results):
