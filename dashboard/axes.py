@@ -64,11 +64,10 @@ def axis_limits(
     x, the second along y), padded per axis by ``padding`` (x, y) with :func:`padded_range`.
 
     A layer's y dimension with a lower ``range`` bound (a PSD's depth below its peak) sets the
-    lowest y: the smallest such bound of all layers. An axis without any data gets no limit
-    (HoloViews' own ranging then applies); so does a log axis without such a bound whose data
-    reach 0 or below.
+    lowest y: the smallest such bound of all layers. Non-finite values count for nothing, nor
+    do values ≤ 0 on a log axis. An axis without any data gets no limit (HoloViews' own
+    ranging then applies).
     """
-    drawn = [layer for layer in layers if len(layer)]
     bounds = [layer.get_dimension(1).range[0] for layer in layers]
     floors = [bound for bound in bounds if bound is not None and np.isfinite(bound)]
     limits = {}
@@ -76,11 +75,12 @@ def axis_limits(
         ("xlim", 0, padding[0], False, None),
         ("ylim", 1, padding[1], logy, min(floors) if floors else None),
     ):
-        extents = np.array([layer.range(index) for layer in drawn], dtype=float).reshape(-1, 2)
-        with np.errstate(invalid="ignore"):  # a layer without values along the axis: NaN
-            low = np.nanmin(extents[:, 0], initial=np.inf)
-            high = np.nanmax(extents[:, 1], initial=-np.inf)
-        axis = padded_range(low, high, pad, log=log, floor=floor)
-        if axis is not None:
-            limits[name] = axis
+        values = np.concatenate(
+            [np.asarray(layer.dimension_values(index), dtype=float) for layer in layers]
+        )
+        values = values[np.isfinite(values) & ((values > 0) if log else True)]
+        if values.size:
+            axis = padded_range(values.min(), values.max(), pad, log=log, floor=floor)
+            if axis is not None:
+                limits[name] = axis
     return limits

@@ -349,8 +349,12 @@ class PlotPanes:
         if pane.object is None:
             pane.loading = stale
             return
-        pane.loading = False
-        cell.styles = STALE_PLOT_STYLES if stale else PLOT_STYLES
+        styles = STALE_PLOT_STYLES if stale else PLOT_STYLES
+        # set only what changes: a setting to the same value still costs param's checks
+        if pane.loading:
+            pane.loading = False
+        if cell.styles != styles:
+            cell.styles = styles
 
 
 class PlotsView(pn.viewable.Viewer):
