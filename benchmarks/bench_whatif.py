@@ -9,8 +9,9 @@ samples per history):
   with 8 pinned runs overlaid, as HoloViews elements, and rendered to Bokeh models (what the
   server builds when a plot is replaced, e.g. after pinning); best of ``--repeat``;
 * in-place update: what the served dashboard does on a slider change, every plot of its
-  ``PlotPanes`` sent new Results through its stream (the current run alternates between two
-  runs that differ in the soil), HoloViews updating the Bokeh models; best of ``--repeat``.
+  ``PlotPanes`` (in a Bokeh document, as served) given new Results (the current run alternates
+  between two runs that differ in the soil), their Bokeh sources and ranges set directly
+  (``PlotPanes._update``); best of ``--repeat``.
 
 The 8 pinned runs are the same Results object pinned under 8 names: drawing cost depends on
 the array sizes, not the values. A pinned run's layers are built once and reused (see
@@ -43,6 +44,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 import holoviews as hv  # noqa: E402
+from bokeh.document import Document  # noqa: E402
 
 from dashboard import plots  # noqa: E402
 from dashboard.plot_panes import PlotPanes  # noqa: E402
@@ -90,11 +92,12 @@ def panel_free(repeat: int) -> None:
 
     def update(pinned):
         """A callable that sends the next current run to every plot, as a slider change does
-        (the dashboard's own plot panes, each plot a DynamicMap on a stream)."""
+        (the dashboard's own plot panes, drawn in a document as a served page has them)."""
         panes = PlotPanes(plots.PLOTS, lambda spec: {"overlays": pinned})
         panes.show(results, {spec.stage for spec in plots.PLOTS})
-        # the plots are kept alive: they subscribe to the streams
-        figures = [hv.renderer("bokeh").get_plot(pane.object) for pane in panes.panes.values()]
+        document = Document()
+        for pane in panes.panes.values():
+            pane.get_root(document)  # the pane's plot, updated in place from now on
         currents = itertools.cycle((other, results))
 
         def send():
@@ -102,14 +105,14 @@ def panel_free(repeat: int) -> None:
             for spec in plots.PLOTS:
                 panes.send(spec.key, data)
 
-        send.figures = figures
+        send.document = document  # the plots live as long as the callable
         return send
 
     print(f"{'every plot (5), best of ' + str(repeat):<58} {'0 pinned':>11} {'8 pinned':>11} ratio")
     for name, build in (
         ("HoloViews elements", draw),
         ("elements rendered to Bokeh", render),
-        ("in-place update through the streams (slider change)", update),
+        ("in-place update of the plot panes (slider change)", update),
     ):
         alone, pinned = best_of(repeat, build(())), best_of(repeat, build(overlays))
         print(f"{name:<58} {alone * 1e3:8.1f} ms {pinned * 1e3:8.1f} ms {pinned / alone:5.2f}")
