@@ -100,12 +100,12 @@ def _index_frozen(doc):
 def _drawing(spec: plots.PlotSpec, draw_arguments: DrawArguments, drawn: dict):
     """DynamicMap callback drawing the Results a Pipe stream carries (its ``data``), with the
     keyword arguments ``draw_arguments(spec)`` gives at the time of drawing; an element drawn
-    already for those results (``drawn[spec.key]``, see :meth:`PlotPanes._update`) is taken
-    instead."""
+    already for those very Results (``drawn[spec.key]``: ``(results, element)``, see
+    :meth:`PlotPanes._update`) is taken instead."""
 
     def callback(data):
-        element = drawn.pop(spec.key, None)
-        return spec.draw(data, **draw_arguments(spec)) if element is None else element
+        drawn_for, element = drawn.pop(spec.key, (None, None))
+        return element if drawn_for is data else spec.draw(data, **draw_arguments(spec))
 
     return callback
 
@@ -238,8 +238,8 @@ class PlotPanes:
         """Per plot, the box around its pane (flex item; dimmed while the plot is stale)."""
         self.streams: dict[str, ResultsPipe] = {}
         """Per plot, the stream holding the Results it shows (sent only when its stage changed)."""
-        self._drawn: dict[str, hv.Element] = {}
-        """Per plot, an element drawn for the Results its stream is about to send."""
+        self._drawn: dict[str, tuple[Results, hv.Element]] = {}
+        """Per plot, the Results its stream is about to send and the element drawn of them."""
 
     def flexbox(self) -> pn.FlexBox:
         """The plots' boxes in one row that wraps in a narrow window."""
@@ -311,9 +311,11 @@ class PlotPanes:
             with param.discard_events(pane):
                 pane.object = None
         self.streams.clear()
+        self._drawn.clear()
 
     def _new_plot(self, spec: plots.PlotSpec, results: Results) -> None:
         """A new plot of ``results``; its stream then updates it in place."""
+        self._drawn.pop(spec.key, None)  # drawn with what the plot showed before
         stream = self.streams[spec.key] = ResultsPipe(data=results)
         self.panes[spec.key].object = _pinned_apart(
             hv.DynamicMap(_drawing(spec, self._draw_arguments, self._drawn), streams=[stream])
@@ -339,7 +341,7 @@ class PlotPanes:
                 _set_ranges(plot, limits)
             stream.hold(results)
         else:
-            self._drawn[spec.key] = element  # HoloViews' callback takes it, not drawing again
+            self._drawn[spec.key] = (results, element)  # HoloViews' callback takes it
             stream.send(results)
 
     def _set_stale(self, key: str, stale: bool) -> None:
