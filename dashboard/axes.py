@@ -37,21 +37,20 @@ def padded_range(
     Returns
     -------
     (low, high) or None
-        None without data. A single value ``v`` gets ±10 % of ``v`` (±0.5 for 0), as
-        HoloViews widens an empty span.
+        None without data (or with all of it below ``floor``). A single value ``v`` gets
+        ±10 % of ``v`` (±0.5 for 0), as HoloViews widens an empty span.
     """
     if floor is not None:
         low = floor
-    if not (np.isfinite(low) and np.isfinite(high)) or (log and min(low, high) <= 0):
+    if not (np.isfinite(low) and np.isfinite(high)) or low > high or (log and low <= 0):
         return None
-    if log:
-        low, high = np.log10(low), np.log10(high)
     if high == low:
         spread = abs(low * 0.1) if low else 0.5
-        low, high = low - spread, high + spread
-    else:
-        pad = padding * (high - low)
-        low, high = (low if floor is not None else low - pad), high + pad
+        return float(low - spread), float(high + spread)
+    if log:
+        low, high = np.log10(low), np.log10(high)
+    pad = padding * (high - low)
+    low, high = (low if floor is not None else low - pad), high + pad
     if log:
         low, high = 10.0**low, 10.0**high
     return float(low), float(high)
@@ -76,7 +75,8 @@ def axis_limits(
         ("ylim", 1, padding[1], logy, min(floors) if floors else None),
     ):
         values = np.concatenate(
-            [np.asarray(layer.dimension_values(index), dtype=float) for layer in layers]
+            [np.empty(0)]
+            + [np.asarray(layer.dimension_values(index), dtype=float) for layer in layers]
         )
         values = values[np.isfinite(values) & ((values > 0) if log else True)]
         if values.size:

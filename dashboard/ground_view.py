@@ -92,16 +92,19 @@ def _criterion(criterion_db: float | None) -> list[hv.HLine]:
     ]
 
 
-def _empty(title: str) -> hv.Curve:
-    """An empty plot titled to say why it is empty."""
-    return hv.Curve([], kdims=[DISTANCE], vdims=[LEVEL]).opts(title=title, **PLOT_OPTIONS)
+def _empty(title: str, overlay: bool = False) -> hv.Curve | hv.Overlay:
+    """An empty plot titled to say why it is empty; an Overlay for a plot that draws one when
+    it has data (a plot drawn once keeps its type: HoloViews cannot turn a Curve's plot into
+    an Overlay's, and the plot stayed empty after a change to the half-space model)."""
+    empty = hv.Curve([], kdims=[DISTANCE], vdims=[LEVEL])
+    return (hv.Overlay([empty]) if overlay else empty).opts(title=title, **PLOT_OPTIONS)
 
 
 def band_levels_plot(results: Results, criterion_db=None, distances_m=(0.0, 10.0, 20.0, 50.0)):
     """One-third-octave velocity levels against band centre at the chosen distances."""
     ground = results.ground
     if ground is None:
-        return _empty("Band levels: no ground surface (full space)")
+        return _empty("Band levels: no ground surface (full space)", overlay=True)
     centre = ground.band_nominal_hz
     layers = [
         hv.Curve(
@@ -135,7 +138,7 @@ def overall_level_plot(results: Results, criterion_db=None, distances_m=()):
     """Overall (energetic sum of the bands) velocity level against distance from the axis."""
     ground = results.ground
     if ground is None:
-        return _empty("Overall level: no ground surface (full space)")
+        return _empty("Overall level: no ground surface (full space)", overlay=True)
     low, high = ground.band_nominal_hz[[0, -1]] if ground.band_nominal_hz.size else (0, 0)
     curve = hv.Curve(
         (ground.distance_m, ground.overall_level_dB),

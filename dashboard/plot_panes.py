@@ -20,6 +20,7 @@ import holoviews as hv
 import numpy as np
 import panel as pn
 import param
+from holoviews.plotting.plot import GenericOverlayPlot
 from holoviews.streams import Pipe
 
 from dashboard import plots
@@ -143,15 +144,23 @@ class ResultsPipe(Pipe):
 def _layer_pairs(plot, element: hv.Element) -> list[tuple] | None:
     """The layers of ``element`` paired with the subplots of the drawn HoloViews ``plot``
     that show them, as ``(layer, subplot, source, columns)``; None unless each layer can be
-    shown by setting its subplot's Bokeh source: the same layers in the same order, each of
-    the same type, label and dimensions (a plot's styles and legend follow from its layers'
-    labels). A layer identical to the one shown (the pinned runs) is left out."""
-    layers = list(element) if isinstance(element, hv.Overlay) else [element]
-    subplots = list(plot.subplots.values()) if isinstance(element, hv.Overlay) else [plot]
+    shown by setting its subplot's Bokeh source: an overlay drawn as an overlay, the same
+    layers in the same order, each of the same type, label and dimensions (a plot's styles
+    and legend follow from its layers' labels) and drawn (HoloViews hides the glyph and the
+    legend entry of a layer a frame left out, and keeps its subplot). A layer identical to
+    the one shown (the pinned runs, the paper's points) is left out."""
+    overlay = isinstance(element, hv.Overlay)
+    if overlay != isinstance(plot, GenericOverlayPlot):
+        return None
+    layers = list(element) if overlay else [element]
+    subplots = list(plot.subplots.values()) if overlay else [plot]
     if len(layers) != len(subplots):
         return None
     pairs = []
     for layer, subplot in zip(layers, subplots, strict=True):
+        renderer = subplot.handles.get("glyph_renderer")
+        if renderer is not None and not renderer.visible:
+            return None
         shown = subplot.current_frame
         if shown is layer:
             continue

@@ -681,6 +681,54 @@ def test_a_failed_comparison_run_leaves_no_legend_entry(cache, cheap_scenario, m
     assert "2D section" in legend() and "2.5D moving load" not in legend()
 
 
+def test_the_other_models_curve_comes_back_after_a_failed_comparison(
+    cache, cheap_scenario, monkeypatch
+):
+    """After a failed comparison run HoloViews hides the curve's glyph and legend entry and
+    keeps its place; the next comparison's curve, at the same place, is drawn by HoloViews
+    again (an update in place would fill the hidden glyph and leave it hidden)."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()
+        figure = next(iter(board.passage.plots.panes["depth_profile"]._plots.values()))[0].state
+        compute = board.runs.companion._compute
+        monkeypatch.setattr(board.runs.companion, "_compute", lambda other: None)
+        board.scenario.soil.youngs_modulus = 9e6
+        monkeypatch.setattr(board.runs.companion, "_compute", compute)
+        board.scenario.soil.youngs_modulus = 11e6
+    assert board.runs.comparison_state == "shown"
+    legend = {item.label["value"] for legend in figure.legend for item in legend.items}
+    assert "2.5D moving load" in legend
+    assert all(renderer.visible for renderer in figure.renderers)
+
+
+def test_the_ground_plots_follow_a_change_to_the_half_space(cache, cheap_scenario):
+    """The Ground tab's plots drawn in the full space (empty) are drawn again with the
+    half-space results: the level plots are Overlays either way (HoloViews cannot turn a
+    plot of a Curve into one of an Overlay; they stayed empty)."""
+    scenario = cheap_scenario()
+    scenario.tunnel.model = "2.5d"
+    board = Dashboard(scenario=scenario, preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()
+        for pane in board.ground.plots.panes.values():
+            pane.get_root(session_doc)  # the tab opened: its plots drawn
+        board.scenario.tunnel.ground = "half_space"
+    assert board.runs.results.ground is not None
+    for key, pane in board.ground.plots.panes.items():
+        figure = next(iter(pane._plots.values()))[0].state
+        points = sum(
+            len(next(iter(renderer.data_source.data.values()), []))
+            for renderer in figure.renderers
+            if hasattr(renderer, "data_source")
+        )
+        assert points > 0, key
+
+
 def test_a_comparison_run_of_older_inputs_is_not_drawn(dashboard):
     """A comparison result that no longer matches the inputs on screen is dropped."""
     shown = dashboard.runs.other_model
@@ -825,6 +873,23 @@ def test_a_plot_whose_layers_change_is_drawn_again_by_holoviews(cache, cheap_sce
     # the same curves; HoloViews draws the one it added last, on top
     assert sorted(map(repr, shown.pop("data"))) == sorted(map(repr, fresh.pop("data")))
     assert shown == fresh
+
+
+def test_a_plot_whose_element_turns_into_an_overlay_is_left_to_holoviews():
+    """A plot drawn of a Curve that is sent an Overlay stating its limits is not updated in
+    place (it has no subplots to pair the layers with): HoloViews has it, and the update goes
+    on (the run's other plots and status line followed only once that no longer raised)."""
+
+    def draw(value, **_):
+        curve = hv.Curve([0.0, value])
+        element = curve if value < 2 else hv.Overlay([curve, hv.Curve([1.0, 0.0])])
+        return element.opts(xlim=(0.0, 1.0), ylim=(0.0, value))
+
+    panes = plot_panes.PlotPanes([plots.PlotSpec("switching", "soil", draw)])
+    panes.show(1.0, {"soil"})
+    panes.panes["switching"].get_root(Document())
+    panes.send("switching", 3.0)
+    assert panes.streams["switching"].data == 3.0
 
 
 def test_one_message_reindexes_the_page_when_a_model_reference_changes(monkeypatch):

@@ -177,6 +177,8 @@ def test_the_psd_axis_spans_ten_decades_below_the_peak(cheap_results):
         (0.0, 0.0, 0.1, False, None, (-0.5, 0.5)),
         (np.inf, -np.inf, 0.1, False, None, None),  # no data
         (-1.0, 2.0, 0.1, True, None, None),  # a log axis reaching 0 without a floor
+        (1.0001, 1.0001, 0.1, True, None, (0.90009, 1.10011)),  # one value on a log axis
+        (1e-20, 1e-12, 0.1, True, 1e-10, None),  # every value below the floor
     ],
 )
 def test_an_axis_covers_its_data_with_the_stated_padding(low, high, padding, log, floor, expected):
@@ -201,6 +203,7 @@ def test_the_axis_limits_cover_every_layer_and_the_lowest_floor():
     assert limits["xlim"] == pytest.approx((0.5, 4.0), rel=1e-12)
     assert limits["ylim"] == pytest.approx((1e-11, 10.0**1.1), rel=1e-12)
     assert axes.axis_limits([hv.Curve(([], []))], (0.1, 0.1)) == {}
+    assert axes.axis_limits([], (0.1, 0.1)) == {}
 
 
 def test_each_passage_plot_states_the_limits_of_its_data(cheap_results):
