@@ -142,8 +142,8 @@ class ResultsPipe(Pipe):
 
 
 def _layer_pairs(plot, element: hv.Element) -> list[tuple] | None:
-    """The layers of ``element`` paired with the subplots of the drawn HoloViews ``plot``
-    that show them, as ``(layer, subplot, source, columns)``; None unless each layer can be
+    """The layers of ``element`` paired with the Bokeh sources of the drawn HoloViews
+    ``plot`` that show them, as ``(layer, source, columns)``; None unless each layer can be
     shown by setting its subplot's Bokeh source: an overlay drawn as an overlay, the same
     layers in the same order, each of the same type, label and dimensions (a plot's styles
     and legend follow from its layers' labels) and drawn (HoloViews hides the glyph and the
@@ -173,14 +173,14 @@ def _layer_pairs(plot, element: hv.Element) -> list[tuple] | None:
             and sorted(source.data) == sorted(columns)
         ):
             return None
-        pairs.append((layer, subplot, source, columns))
+        pairs.append((layer, source, columns))
     return pairs
 
 
 def _set_data(pairs: list[tuple]) -> None:
     """Set each layer's data on its Bokeh source (:func:`_layer_pairs`), where it changed
     (the paper's points stay as they are)."""
-    for layer, _, source, columns in pairs:
+    for layer, source, columns in pairs:
         data = {name: layer.dimension_values(name) for name in columns}
         if any(not np.array_equal(source.data[name], data[name]) for name in columns):
             source.data = data
