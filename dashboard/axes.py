@@ -1,10 +1,11 @@
 """The axis limits of the passage plots, computed from the data they draw.
 
 Each passage plot states its limits (``xlim``, ``ylim``) instead of leaving them to HoloViews:
-a run's update of the plot then sets the Bokeh ranges to the very limits its first drawing had
-(:meth:`~dashboard.plot_panes.PlotPanes.show_stages` updates the figure's data and ranges in
-place, without HoloViews), and the rule is one an engineer can read: the data's extent over
-every layer, widened by a fraction of its span (in decades on a log axis).
+a run's update of the plot then sets the Bokeh ranges to the limits of the new data by the
+rule of its first drawing (:meth:`~dashboard.plot_panes.PlotPanes._update` sets the figure's
+data and ranges in place, without HoloViews), and the rule is one an engineer can read: the
+data's extent over every layer, widened by a fraction of its span (in decades on a log
+axis).
 """
 
 from __future__ import annotations
