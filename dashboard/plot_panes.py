@@ -343,8 +343,8 @@ class PlotPanes:
         element = spec.draw(results, **self._draw_arguments(spec))
         limits = _stated_limits(element)
         # without both limits the ranges would need HoloViews' ranging of the data
-        pairs = [_layer_pairs(plot, element) for plot in figures] if len(limits) == 2 else [None]
-        if all(found is not None for found in pairs):
+        pairs = [_layer_pairs(plot, element) for plot in figures] if len(limits) == 2 else None
+        if pairs is not None and None not in pairs:
             for plot, found in zip(figures, pairs, strict=True):
                 _set_data(found)
                 _set_ranges(plot, limits)

@@ -59,7 +59,9 @@ PLOT_OPTIONS = {
 """Options every plot of the dashboard and the report shares."""
 # In the dashboard the same plot is updated with new data and its axes must follow. framewise
 # is a normalisation option of each element: set on an Overlay it is ignored (the axes of the
-# overlaid plots stayed at the first run's ranges), so every layer carries it.
+# overlaid plots stayed at the first run's ranges), so every layer carries it. With it,
+# HoloViews' update of a plot also takes each frame's stated limits (xlim, ylim; without it
+# the first frame's stayed): the path of a plot whose layers changed (plot_panes).
 _FOLLOW_DATA = {"framewise": True}
 
 LEGEND_LABEL_CHARS = 30
