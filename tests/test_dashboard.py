@@ -92,6 +92,11 @@ def _shown(board, key):
     return _panes(board)[key].object[()]
 
 
+def _drawn_plot(pane):
+    """The HoloViews plot a pane draws on its page (its one root)."""
+    return next(iter(pane._plots.values()))[0]
+
+
 def _pane_data(board, key):
     """(x, y) arrays of the first curve shown in a dashboard plot."""
     curve = next(iter(_curves(_shown(board, key)).values()))
@@ -674,7 +679,7 @@ def test_a_failed_comparison_run_leaves_no_legend_entry_until_the_next_one(
     with set_curdoc(session_doc):
         board.template().server_doc(session_doc)
         board.refresh()
-        figure = next(iter(board.passage.plots.panes["depth_profile"]._plots.values()))[0].state
+        figure = _drawn_plot(board.passage.plots.panes["depth_profile"]).state
 
         def legend():
             return {item.label["value"] for legend in figure.legend for item in legend.items}
@@ -708,7 +713,7 @@ def test_the_ground_plots_follow_a_change_to_the_half_space(cache, cheap_scenari
         board.scenario.tunnel.ground = "half_space"
     assert board.runs.results.ground is not None
     for key, pane in board.ground.plots.panes.items():
-        figure = next(iter(pane._plots.values()))[0].state
+        figure = _drawn_plot(pane).state
         points = sum(
             len(next(iter(renderer.data_source.data.values()), []))
             for renderer in figure.renderers
@@ -810,10 +815,7 @@ def test_a_run_updates_each_passage_plot_in_place_as_a_fresh_drawing_shows_it(
         board.refresh()
         if pinned:
             board.whatif.pin_button.clicks += 1
-        drawn = {
-            key: next(iter(pane._plots.values()))[0]
-            for key, pane in board.passage.plots.panes.items()
-        }
+        drawn = {key: _drawn_plot(pane) for key, pane in board.passage.plots.panes.items()}
         before = {key: _figure_content(plot.state) for key, plot in drawn.items()}
         redrawn_by_holoviews = []
         for plot in drawn.values():
@@ -825,7 +827,7 @@ def test_a_run_updates_each_passage_plot_in_place_as_a_fresh_drawing_shows_it(
     assert not redrawn_by_holoviews
     for spec in plots.PLOTS:
         figure = drawn[spec.key].state
-        assert next(iter(board.passage.plots.panes[spec.key]._plots.values()))[0].state is figure
+        assert _drawn_plot(board.passage.plots.panes[spec.key]).state is figure
         arguments = board.passage._draw_arguments(spec)
         fresh = hv.render(spec.draw(board.runs.results, **arguments), backend="bokeh")
         shown = _figure_content(figure)
@@ -842,7 +844,7 @@ def test_a_plot_whose_layers_change_is_drawn_again_by_holoviews(cache, cheap_sce
     with set_curdoc(session_doc):
         board.template().server_doc(session_doc)
         board.refresh()
-        plot = next(iter(board.passage.plots.panes["depth_profile"]._plots.values()))[0]
+        plot = _drawn_plot(board.passage.plots.panes["depth_profile"])
         depth = board.runs.results.soil.depth_m
         far = 10.0 * board.runs.results.soil.peak_disp_m.max()
         fe = SimpleNamespace(
@@ -933,10 +935,7 @@ def test_a_change_leaves_the_pinned_runs_alone_and_the_axes_cover_them(
         board.scenario.train.speed_kmh = 60.0  # a slower passage: a longer time history
         board.refresh()
         board.whatif.pin_button.clicks += 1
-        drawn = {
-            key: next(iter(pane._plots.values()))[0]
-            for key, pane in board.passage.plots.panes.items()
-        }
+        drawn = {key: _drawn_plot(pane) for key, pane in board.passage.plots.panes.items()}
         pinned_updates, rangings = [], []
         for plot in drawn.values():
             (subplot,) = [
