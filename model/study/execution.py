@@ -14,6 +14,7 @@ import contextlib
 import logging
 import multiprocessing
 import os
+import queue
 import re
 import threading
 import time
@@ -27,7 +28,7 @@ import pandas as pd
 
 # Imported with the module, not when the first study starts: the import takes ~0.25 s, which
 # is the process's once, not a study's.
-from distributed import Client, LocalCluster, as_completed
+from distributed import Client, LocalCluster
 from distributed.comm import connect
 
 from model.params import Scenario
@@ -404,23 +405,26 @@ def collect_tasks(
     index_of = {future.key: index for index, future in enumerate(futures)}
     rows: dict[int, dict] = {}
     cancelled = False
-    finished = as_completed(futures, loop=client.loop)
+    # each future puts itself here as it finishes: a row is gathered the moment its run ends,
+    # and the cancel flag is looked at between rows or every POLL_S
+    finished: queue.SimpleQueue = queue.SimpleQueue()
+    for future in futures:
+        future.add_done_callback(finished.put)
     try:
-        while not finished.is_empty():
+        while len(rows) < len(futures):
             if cancel is not None and cancel.is_set():
                 cancelled = True
                 break
-            batch = finished.next_batch(block=False)
-            if not batch:
-                time.sleep(POLL_S)
+            try:
+                future = finished.get(timeout=POLL_S)
+            except queue.Empty:
                 continue
-            for future in batch:
-                index = index_of[future.key]
-                rows[index] = {**inputs[index], **_outcome(future)}
-                if progress is not None:
-                    progress(len(rows), len(futures), rows[index])
-                if record is not None:
-                    record(index, rows[index])
+            index = index_of[future.key]
+            rows[index] = {**inputs[index], **_outcome(future)}
+            if progress is not None:
+                progress(len(rows), len(futures), rows[index])
+            if record is not None:
+                record(index, rows[index])
     except KeyboardInterrupt:
         cancelled = True
     finally:
