@@ -5,6 +5,7 @@ Domain helpers shared by the dashboard and any other front end; no GUI code.
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Mapping
 from pathlib import Path
@@ -47,10 +48,17 @@ def preset_descriptions() -> dict[str, str]:
 def matching_preset(scenario: Scenario) -> str:
     """Name of the preset whose inputs ``scenario`` has exactly, else :data:`CUSTOM`."""
     current = scenario.to_dict()
-    for name in Scenario.preset_names():
-        if Scenario.preset(name).to_dict() == current:
+    for name, inputs in _preset_inputs().items():
+        if inputs == current:
             return name
     return CUSTOM
+
+
+@functools.cache
+def _preset_inputs() -> dict[str, dict]:
+    """:meth:`Scenario.to_dict` of every preset, by name, built once per process: the page
+    asks which preset the inputs match after every change (7 presets built anew took 6 ms)."""
+    return {name: Scenario.preset(name).to_dict() for name in Scenario.preset_names()}
 
 
 def train_type_of(train: Train) -> str:
