@@ -41,7 +41,12 @@ from model.soil.response import (
 )
 from model.soil.stresses import StressResponse, section_response, section_transfer
 from model.spectra import one_sided_psd
-from model.track.vehicle_track import VehicleTrackResult, check_inputs, simulate
+from model.track.vehicle_track import (
+    VehicleTrackResult,
+    check_inputs,
+    n_time_steps,
+    simulate,
+)
 
 N_RAILS = 2  # both rails load the same tunnel section (docs/model.md §6)
 # invariant_warnings: growth of the peak with depth tolerated, relative to the invert peak (the
@@ -421,22 +426,17 @@ def run(
     load = stage("load", lambda: _load_stage(vt, scenario))
 
     # the half-space model adds the ground-surface results (docs/halfspace.md)
-    half_space = scenario.tunnel.ground == "half_space"
-    respond, transfer_of = (
-        (halfspace_response, halfspace_transfer)
-        if half_space
-        else (lambda *args: (*section_response(*args), None), section_transfer)
+    respond = (
+        halfspace_response
+        if scenario.tunnel.ground == "half_space"
+        else lambda *args: (*section_response(*args), None)
     )
 
     def soil_stage():
         q, dt = load.line_load_N_per_m, _time_step(load.t_s)
         if cache is None:
             return respond(q, dt, scenario)
-        transfer, _ = cache.fetch(
-            TRANSFER,
-            f"{keys[TRANSFER]} record {q.size} × {dt!r} s",
-            lambda: _read_only(transfer_of(q, dt, scenario)),
-        )
+        transfer = _fetch_transfer(scenario, cache, keys, q.size, dt)
         spectrum, _ = cache.fetch(
             LOAD_SPECTRUM,
             keys[LOAD_SPECTRUM],
@@ -464,6 +464,40 @@ def run(
         stage_seconds=seconds,
         cached_stages=tuple(cached),
     )
+
+
+def prefetch_transfer(scenario: Scenario, cache: StageCache) -> None:
+    """Compute the soil stage's tunnel–soil transfer functions of ``scenario`` into ``cache``
+    (or find them there), without the vehicle–track stage.
+
+    They depend on the inputs alone: the load record's grid, ``n_time_steps + 1`` samples at
+    ``numerics.dt``, is known before the passage is simulated. A process about to fork workers
+    that will run the scenario (a study's LocalCluster) computes them once, on all its cores,
+    instead of every worker computing them in its first run; a run of the scenario with that
+    cache then finds them (or waits for the thread computing them).
+
+    Raises
+    ------
+    ValueError
+        Inputs that :func:`run` would refuse (nothing is computed).
+    """
+    scenario.validate()
+    check_record_padding(scenario)
+    check_inputs(scenario)
+    keys = stage_keys(scenario)
+    _fetch_transfer(scenario, cache, keys, n_time_steps(scenario) + 1, scenario.numerics.dt)
+
+
+def _fetch_transfer(scenario: Scenario, cache: StageCache, keys: dict, n_samples: int, dt_s: float):
+    """The transfer functions of ``scenario`` on the grid of a load record of ``n_samples``
+    samples at ``dt_s`` (s), served by ``cache`` or computed into it."""
+    transfer_of = halfspace_transfer if scenario.tunnel.ground == "half_space" else section_transfer
+    transfer, _ = cache.fetch(
+        TRANSFER,
+        f"{keys[TRANSFER]} record {n_samples} × {dt_s!r} s",
+        lambda: _read_only(transfer_of(np.zeros(n_samples), dt_s, scenario)),
+    )
+    return transfer
 
 
 def _stable(vt: VehicleTrackResult) -> None:

@@ -134,6 +134,44 @@ def test_a_new_load_on_the_same_record_grid_reuses_the_soil_transfer_bit_for_bit
     assert cache.hits[pipeline.TRANSFER] == 2 and cache.misses[pipeline.TRANSFER] == 1
 
 
+@pytest.mark.parametrize(
+    "tunnel",
+    [{"model": "2d"}, {"model": "2.5d"}, {"model": "2.5d", "ground": "half_space"}],
+    ids=["2d", "2.5d", "half-space"],
+)
+def test_transfer_functions_prefetched_before_a_run_are_the_ones_it_uses(cheap_scenario, tunnel):
+    """The record grid is known from the inputs: the transfer functions computed ahead (here in
+    another thread, while the run's vehicle–track stage computes) are the run's, found under
+    the key the run asks for, and the results equal a fresh run's bit for bit."""
+    scenario = cheap_scenario()
+    scenario.tunnel.param.update(**tunnel)
+    cache = StageCache()
+    with ThreadPoolExecutor(1) as pool:
+        ahead = pool.submit(pipeline.prefetch_transfer, scenario, cache)
+        served = run(scenario, cache=cache)
+        ahead.result()
+    assert cache.misses[pipeline.TRANSFER] == 1  # computed once, by whichever came first
+    assert cache.hits[pipeline.TRANSFER] == 1
+    fresh = run(scenario, cache=None)
+    np.testing.assert_array_equal(served.soil.disp_m, fresh.soil.disp_m)
+    np.testing.assert_array_equal(
+        served.stress.deviator_history_Pa, fresh.stress.deviator_history_Pa
+    )
+    if served.ground is not None:
+        np.testing.assert_array_equal(
+            served.ground.velocity_level_dB, fresh.ground.velocity_level_dB
+        )
+
+
+def test_prefetching_refuses_what_a_run_refuses(cheap_scenario):
+    scenario = cheap_scenario()
+    scenario.numerics.dt = 1e-3  # beyond the explicit integration's stable step
+    cache = StageCache()
+    with pytest.raises(ValueError, match="dt"):
+        pipeline.prefetch_transfer(scenario, cache)
+    assert cache.misses[pipeline.TRANSFER] == 0
+
+
 def test_a_transfer_from_another_grid_is_refused(cheap_scenario):
     from model.soil.stresses import section_response, section_transfer
 

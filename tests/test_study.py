@@ -21,7 +21,8 @@ import pandas as pd
 import pytest
 from distributed import Client
 
-from model.pipeline import run
+from model.params import Scenario
+from model.pipeline import TRANSFER, StageCache, run
 from model.study import execution as study_module
 from model.study.cli import main, parse_values
 from model.study.definition import MAX_RUNS_UNCONFIRMED, Study, define_study
@@ -147,6 +148,27 @@ def test_rows_equal_in_process_runs_bit_for_bit(cheap_scenario, tmp_path):
     back = read_study(tmp_path)
     pd.testing.assert_frame_equal(back, table, check_exact=True)
     assert back.attrs == table.attrs
+
+
+def test_transfer_functions_computed_before_the_fork_are_the_first_runs(
+    cheap_scenario, monkeypatch
+):
+    """What a new LocalCluster's workers inherit from this process is what their first runs
+    ask the task cache for; inputs a run refuses are left to the runs (their rows say why)."""
+    cache = StageCache(size=1, transfer_size=1)
+    monkeypatch.setattr(study_module, "_TASK_CACHE", cache)
+    study = define_study(cheap_scenario(), {"train.speed_kmh": [90, 100]}, seeds=[7, 8])
+    study_module._prefetch_before_fork(study)
+    assert (cache.hits[TRANSFER], cache.misses[TRANSFER]) == (0, 1)
+    _, first = next(study.runs())
+    run(Scenario.from_json(first), cache=cache)  # as a forked worker's first task runs it
+    assert (cache.hits[TRANSFER], cache.misses[TRANSFER]) == (1, 1)
+
+    def refuse(scenario, cache):
+        raise ValueError("a run refuses these inputs")
+
+    monkeypatch.setattr(study_module, "prefetch_transfer", refuse)
+    study_module._prefetch_before_fork(study)  # the study goes on: each row will say why
 
 
 def test_rerun_from_saved_definition_gives_the_same_table(client, cheap_scenario, tmp_path):
