@@ -8,6 +8,7 @@ The sub-packages follow the chain of the computation (docs/model.md):
 - ``longterm``: stresses → settlement over years of traffic, plastic and consolidation, in the
   layered site (§10, §14, §15);
 - ``pipeline``: :func:`run`, the one place the stages are chained, with their cache;
+  ``run_checks``: what a run refuses before computing and warns about after;
 - ``study``: many runs on Dask, sweeps and Monte-Carlo bands (§11);
 - ``fe``: the OpenSeesPy finite-element check of the section (§12);
 - ``spectra`` (PSD/FFT helpers shared by the stages), ``run_cost`` (memory and time of a run,

@@ -10,7 +10,7 @@ import pytest
 import scipy.sparse
 import scipy.sparse.linalg
 
-from model import pipeline
+from model import pipeline, run_checks
 from model.params import Numerics, Scenario, Soil, Tunnel
 from model.soil import moving_load_2p5d
 from model.soil.inputs import invert_load_coefficients
@@ -497,17 +497,17 @@ def test_speed_at_or_above_the_shear_wave_speed_is_computed_with_a_warning():
     that the 2.5D model includes moving-load effects, and the 2D one that it ignores them."""
     scenario = Scenario.paper_2p5d()
     scenario.soil.youngs_modulus = 2e6  # c₂ = 20.7 m/s, below the train's 22.2 m/s
-    (warning,) = pipeline.scenario_warnings(scenario)
+    (warning,) = run_checks.scenario_warnings(scenario)
     assert "107% of the soil shear-wave speed" in warning and "Mach cone" in warning
     h = section_receptance(
         [0.5, 5.0], [0.0, 10.0], scenario.tunnel, scenario.soil, 32, scenario.train.speed
     )
     assert np.all(np.isfinite(h)) and np.all(h[:, 0].imag < 0)
     scenario.soil.youngs_modulus = 3e6  # c₂ = 25.4 m/s: 88 %
-    (warning,) = pipeline.scenario_warnings(scenario)
+    (warning,) = run_checks.scenario_warnings(scenario)
     assert "2.5D model includes them" in warning
     scenario.tunnel.model = "2d"
-    (warning,) = pipeline.scenario_warnings(scenario)
+    (warning,) = run_checks.scenario_warnings(scenario)
     assert "ignores them" in warning
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from model import pipeline
+from model import pipeline, run_checks
 from model.cli import main
 from model.longterm.statements import SETTLEMENT_COVERS
 from model.params import Numerics, Scenario, ScenarioError
@@ -329,10 +329,10 @@ def test_each_stage_output_is_handed_on_once_it_is_ready(cheap_scenario):
 
 def test_fast_train_on_soft_soil_and_short_records_give_warnings_not_errors():
     scenario = Scenario.paper()
-    assert pipeline.scenario_warnings(scenario) == []
+    assert run_checks.scenario_warnings(scenario) == []
     scenario.soil.youngs_modulus = 1e6  # c2 = 14.6 m/s, below the train's 22.2 m/s
     scenario.train.single_bogie = True  # a 1.0 s passage, shorter than the 4 s PSD segment
-    warnings = pipeline.scenario_warnings(scenario)
+    warnings = run_checks.scenario_warnings(scenario)
     assert any("152% of the soil shear-wave speed 14.6 m/s" in w for w in warnings)
     assert any("less than numerics.psd_segment = 4 s" in w for w in warnings)
 
@@ -344,10 +344,10 @@ def test_numerics_that_cut_the_response_short_give_warnings_or_are_refused():
     scenario = Scenario.paper()
     scenario.numerics.approach_distance = 2.0
     scenario.numerics.zero_pad_factor = 1
-    warnings = pipeline.scenario_warnings(scenario)
+    warnings = run_checks.scenario_warnings(scenario)
     assert any("approach_distance = 2 m is shorter than 4/β = 3.5 m" in w for w in warnings)
     with pytest.raises(ScenarioError, match=r"zero_pad_factor = 1 pads.*at least 2"):
-        pipeline.check_record_padding(scenario)
+        run_checks.check_record_padding(scenario)
 
 
 def test_inconsistent_scenario_is_refused_before_any_computation(cheap_scenario):

@@ -30,7 +30,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from model.params import SECTIONS, Count, Quantity, Scenario
-from model.pipeline import INVARIANT_TOLERANCE, SimulationError, run
+from model.pipeline import SimulationError, run
+from model.run_checks import INVARIANT_TOLERANCE
 from model.run_cost import SlowRunWarning, estimate_run
 from model.track.vehicle_track import check_inputs
 

@@ -16,7 +16,8 @@ import pytest
 from model import pipeline, run_cost
 from model.cli import main
 from model.params import DATA_DIR, Scenario, ScenarioError
-from model.pipeline import StageCache, invariant_warnings, run, stage_keys
+from model.pipeline import StageCache, run, stage_keys
+from model.run_checks import invariant_warnings
 from model.run_cost import SlowRunWarning, estimate_run
 from model.soil.response import SoilResponse
 from model.soil.section_2d import invert_receptance

@@ -79,7 +79,7 @@ class Numerics(param.Parameterized):
         doc="Record length used for the soil FFT, as a multiple of the passage duration, in "
         "model.soil.response.soil_response (convergence of the peak is shown in tests). Bounds "
         "1–256; a run also refuses a padded record shorter than the passage plus the wave tail "
-        "to max_depth (model.pipeline.check_record_padding), which would wrap the deep response.",
+        "to max_depth (model.run_checks.check_record_padding), which would wrap the deep response.",
     )
     psd_segment = _q(
         4.0,
