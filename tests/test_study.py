@@ -136,6 +136,8 @@ def test_rows_equal_in_process_runs_bit_for_bit(cheap_scenario, tmp_path):
     assert sorted(seen) == [(1, 4), (2, 4), (3, 4), (4, 4)]
     assert table.attrs["cancelled"] is False
     assert dict(os.environ) == environment
+    # the transfer functions computed here for the forked workers are not kept here
+    assert not study_module._TASK_CACHE._entries[TRANSFER]
     depths = [column for _, column in profile_depths(table)]
     for speed, seed in [(90.0, 7), (90.0, 8), (100.0, 7), (100.0, 8)]:
         summary, profile = _in_process_row(base, {"train.speed_kmh": speed}, seed)
@@ -158,7 +160,7 @@ def test_transfer_functions_computed_before_the_fork_are_the_first_runs(
     cache = StageCache(size=1, transfer_size=1)
     monkeypatch.setattr(study_module, "_TASK_CACHE", cache)
     study = define_study(cheap_scenario(), {"train.speed_kmh": [90, 100]}, seeds=[7, 8])
-    study_module._prefetch_before_fork(study)
+    assert study_module._prefetch_before_fork(study)
     assert (cache.hits[TRANSFER], cache.misses[TRANSFER]) == (0, 1)
     _, first = next(study.runs())
     run(Scenario.from_json(first), cache=cache)  # as a forked worker's first task runs it
@@ -168,7 +170,7 @@ def test_transfer_functions_computed_before_the_fork_are_the_first_runs(
         raise ValueError("a run refuses these inputs")
 
     monkeypatch.setattr(study_module, "prefetch_transfer", refuse)
-    study_module._prefetch_before_fork(study)  # the study goes on: each row will say why
+    assert not study_module._prefetch_before_fork(study)  # the study goes on: its rows say why
 
 
 def test_rerun_from_saved_definition_gives_the_same_table(client, cheap_scenario, tmp_path):

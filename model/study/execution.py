@@ -327,16 +327,19 @@ def execute_study(
     stop) raises out of this function, and the rows recorded are then all there is.
     """
     check_run_count(study.n_runs, confirm)
-    if not isinstance(scheduler, Client) and _scheduler_address(scheduler) is None:
-        _prefetch_before_fork(study)
+    new_cluster = not isinstance(scheduler, Client) and _scheduler_address(scheduler) is None
+    prefetched = new_cluster and _prefetch_before_fork(study)
     with study_client(scheduler, n_workers, connect_timeout_s) as client:
+        if prefetched:  # the forked workers have their copy: this process keeps none (tens of MB)
+            _TASK_CACHE.clear()
         rows, cancelled = _collect(client, study, progress, cancel, record)
     return study_table(study, rows, cancelled)
 
 
-def _prefetch_before_fork(study: Study) -> None:
+def _prefetch_before_fork(study: Study) -> bool:
     """Compute the tunnel–soil transfer functions of the study's first run into this process's
-    task cache before a new LocalCluster forks its workers (nothing where workers spawn).
+    task cache before a new LocalCluster forks its workers (nothing where workers spawn);
+    True when they are there.
 
     The workers inherit them, so the runs at that point (all the runs of a seeds-only study)
     reuse them from the first on; otherwise every worker's first run computed them, the same
@@ -345,10 +348,13 @@ def _prefetch_before_fork(study: Study) -> None:
     (median of 8 alternated pairs, 7 faster). Inputs that a run refuses are left to its row.
     """
     if worker_start_method() != "fork":
-        return
+        return False
     _, scenario_json = next(study.runs())
-    with contextlib.suppress(ValueError):
+    try:
         prefetch_transfer(Scenario.from_json(scenario_json), _TASK_CACHE)
+    except ValueError:
+        return False
+    return True
 
 
 SEED_ROUNDS = 3
