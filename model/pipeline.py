@@ -30,7 +30,7 @@ from model.longterm.settlement import LongTermResult, long_term_settlement
 from model.params import Scenario
 from model.params.measured_profile import profile_digest
 from model.run_checks import check_record_padding, invariant_warnings, scenario_warnings
-from model.run_cost import SLOW_RUN_SECONDS, SlowRunWarning, estimate_run
+from model.run_cost import SLOW_RUN_SECONDS, RunEstimate, SlowRunWarning, estimate_run
 from model.soil.ground_vibration import GroundResponse, ground_summary
 from model.soil.halfspace_response import halfspace_response, halfspace_transfer
 from model.soil.response import (
@@ -384,13 +384,9 @@ def run(
     SlowRunWarning
         Before computing, if the run is estimated to take longer than ``SLOW_RUN_SECONDS``.
     """
-    scenario.validate()
-    check_record_padding(scenario)
-    estimate = estimate_run(scenario)
+    estimate = _admitted(scenario)
     if estimate.total_seconds > SLOW_RUN_SECONDS:
         warnings.warn(estimate.slow_message(), SlowRunWarning, stacklevel=2)
-    check_inputs(scenario)
-    check_longterm_inputs(scenario)
     report = progress or (lambda stage, fraction: None)
     done = on_stage or (lambda stage, output: None)
     keys = stage_keys(scenario)
@@ -475,13 +471,29 @@ def prefetch_transfer(scenario: Scenario, cache: StageCache) -> None:
     Raises
     ------
     ValueError
-        Inputs that :func:`run` would refuse (nothing is computed).
+        Inputs that :func:`run` refuses, a run too large for the memory among them (nothing
+        is computed).
+    """
+    _admitted(scenario)
+    keys = stage_keys(scenario)
+    _fetch_transfer(scenario, cache, keys, n_time_steps(scenario) + 1, scenario.numerics.dt)
+
+
+def _admitted(scenario: Scenario) -> RunEstimate:
+    """The run's estimate, once every check before computing has passed: inputs, the padded
+    record, memory (``estimate_run``), the vehicle–track and the long-term stages' own.
+
+    Raises
+    ------
+    ValueError
+        The first check refused; the message names the parameter.
     """
     scenario.validate()
     check_record_padding(scenario)
+    estimate = estimate_run(scenario)
     check_inputs(scenario)
-    keys = stage_keys(scenario)
-    _fetch_transfer(scenario, cache, keys, n_time_steps(scenario) + 1, scenario.numerics.dt)
+    check_longterm_inputs(scenario)
+    return estimate
 
 
 def _fetch_transfer(scenario: Scenario, cache: StageCache, keys: dict, n_samples: int, dt_s: float):
