@@ -42,11 +42,13 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from test_browser import (  # noqa: E402  (shared browser helpers)
+    FIGURES_JS,
     PAINTED_JS,
     RUN_WAIT_MS,
     STAGE_OF_PLOT,
     launch_chromium,
     serve_app_process,
+    signatures,
     type_value,
     wait_for_plots,
 )
@@ -115,48 +117,10 @@ ENTER_KEY_JS = """() => {
     if (event.key === "Enter") window.__enterAt = performance.now();
   }, {capture: true, once: true});
 }"""
-# A figure's data signature, by title: the sum, over its renderers' columns, of each column's
-# sum of finite numbers. The page keeps each column's sum by its array (a new run's data comes
-# as new arrays; this app replaces a source's data, never patches it in place), so the check
-# after each message of a change sums only the arrays that are new. Summing every value of
-# every figure at each check (tests/test_browser.py's FIGURES_JS) was the benchmark's own cost
-# in the page: ~20 ms a change with 8 pinned runs' curves, on the thread that paints.
-SIGNATURES_JS = """() => {
-  const sums = (window.__columnSums ??= new WeakMap());
-  const columnSum = (column) => {
-    let sum = sums.get(column);
-    if (sum === undefined) {
-      sum = 0;
-      for (const value of column) {
-        if (typeof value === "number" && isFinite(value)) sum += value;
-      }
-      sums.set(column, sum);
-    }
-    return sum;
-  };
-  const out = {};
-  for (const doc of (window.Bokeh ? window.Bokeh.documents : [])) {
-    for (const model of doc.all_models) {
-      if (model.type !== "Figure") continue;
-      let signature = 0;
-      for (const renderer of model.renderers) {
-        const source = renderer.data_source;
-        if (!source) continue;
-        const columns = source.data instanceof Map ? [...source.data.values()]
-                                                   : Object.values(source.data);
-        for (const column of columns) {
-          if (column && typeof column === "object") signature += columnSum(column);
-        }
-      }
-      out[model.title ? model.title.text : ""] = signature;
-    }
-  }
-  return out;
-}"""
 NEW_DATA_PAINTED_JS = f"""([before, titles, timeoutMs]) => new Promise((resolve, reject) => {{
   const docs = [...window.Bokeh.documents];
   const isNew = () => {{
-    const now = ({SIGNATURES_JS})();
+    const now = Object.fromEntries(({FIGURES_JS})().map(f => [f.title, f.signature]));
     return titles.every(t => t in now && now[t] !== before[t]);
   }};
   let scheduled = false, done = false;
@@ -178,7 +142,7 @@ def timed_change(page, path: str, value: str, stages: tuple[str, ...]) -> tuple[
     """Enter ``value`` for ``path``; return the seconds until the plots of ``stages`` show new
     data and are painted, measured in the page from the Enter key, and as the test driver
     sees it (with its own round trips)."""
-    before = page.evaluate(SIGNATURES_JS)
+    before = signatures(page)
     titles = [title for title, stage in STAGE_OF_PLOT.items() if stage in stages]
     page.evaluate(ENTER_KEY_JS)
     start = time.perf_counter()
