@@ -16,10 +16,12 @@ import sys
 import threading
 from pathlib import Path
 
+import dask
 import numpy as np
 import pandas as pd
 import pytest
 from distributed import Client
+from distributed.nanny import WorkerProcess
 
 from model.params import Scenario
 from model.pipeline import TRANSFER, StageCache, run
@@ -150,6 +152,23 @@ def test_rows_equal_in_process_runs_bit_for_bit(cheap_scenario, tmp_path):
     back = read_study(tmp_path)
     pd.testing.assert_frame_equal(back, table, check_exact=True)
     assert back.attrs == table.attrs
+
+
+def test_local_cluster_runs_without_the_diagnostics_of_a_dashboard_it_does_not_start():
+    """A study's own LocalCluster: its workers run with LOCAL_CLUSTER_CONFIG (no profiler), its
+    scheduler steals no task, its nannies looked for their new workers at the short interval
+    (not Dask's 50 ms); this process's configuration is as it was afterwards."""
+    profile = "distributed.worker.profile.enabled"
+    before = dask.config.get(profile)
+
+    def steals(dask_scheduler) -> bool:
+        return "stealing" in dask_scheduler.extensions
+
+    with study_client(None, n_workers=1) as client:
+        assert list(client.run(dask.config.get, profile).values()) == [False]
+        assert client.run_on_scheduler(steals) is False
+        assert WorkerProcess._init_msg_interval == study_module.NANNY_POLL_S
+    assert dask.config.get(profile) == before
 
 
 def test_transfer_functions_computed_before_the_fork_are_the_first_runs(
