@@ -57,13 +57,11 @@ LOCAL_CLUSTER_CONFIG = {
     # The nannies look at their workers' memory every 0.5 s, not 0.1 s: a run's memory is
     # bounded before it starts (model.run_cost.estimate_run).
     "distributed.worker.memory.monitor-interval": "500ms",
-    # Equal single-threaded workers fed from the scheduler's queue: nothing to steal.
-    "distributed.scheduler.work-stealing": False,
 }
-"""Dask settings of a study's own LocalCluster (an existing scheduler keeps its own). Together
-they took a cold 10-run study of the paper case from 2.10 s to 2.01 s (medians of 10
-alternated runs): idle, the calling process spent 28 ms of CPU per second and each worker 22,
-against 18 and 6–9 with them."""
+"""Dask settings of a study's own LocalCluster (an existing scheduler keeps its own). Idle, the
+calling process spent 19–28 ms of CPU per second and each worker 17–20 with Dask's, 12 and 5
+with these; a cold 10-run study of the paper case took 1.94 s against 2.06 s (medians of 12
+alternated studies in one process)."""
 _ADDRESS_RE = re.compile(r"^(tcp|tls|ucx|ws|wss)://[^\s:/]+:\d+$")
 # The package versions each new worker reports when it registers, and the scheduler its own:
 # Dask looks them up once per process (~10 ms). Looked up here, once, the forked workers
