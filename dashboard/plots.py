@@ -19,6 +19,7 @@ import holoviews.plotting.bokeh  # noqa: F401  (registers the Bokeh options used
 import numpy as np
 
 from dashboard.axes import axis_limits
+from dashboard.legend_swatches import swatches_apart
 from dashboard.parsed import scenario_of
 from dashboard.whatif import CURRENT_COLOUR, CURRENT_LABEL
 from model.fe.store import FEResult
@@ -100,12 +101,15 @@ LEGEND_PLACE_HOLDER = "top_left"
 
 def _legend_below(plot, element) -> None:
     """HoloViews hook: move the figure's legends below the axes, where they stay (a plot
-    updated in place keeps them there: the hook then changes nothing)."""
+    updated in place keeps them there: the hook then changes nothing), and draw the entries
+    named by a value from swatch renderers (:func:`~dashboard.legend_swatches.swatches_apart`)."""
     figure = plot.state
     for legend in figure.legend:
         if legend not in figure.below:
             figure.center.remove(legend)
             figure.add_layout(legend, "below")
+        for item in legend.items:
+            swatches_apart(figure, item)
 
 
 def legend_labels(names: Sequence[str]) -> list[str]:

@@ -26,6 +26,7 @@ BOUNDARIES_JS = """() => {
       const ys = [];
       for (const renderer of model.renderers) {
         if (!renderer.glyph || renderer.glyph.type !== "HSpan") continue;
+        if (renderer.visible === false) continue;  // not drawn (a legend swatch)
         const y = renderer.data_source.data.get ? renderer.data_source.data.get("y")
                                                 : renderer.data_source.data.y;
         if (y) ys.push(...y);

@@ -42,8 +42,9 @@ pytestmark = [
 
 PINNED = "today"
 
-# Every figure's legend entries in drawing order (a legend item labelled by a data field, the
-# pinned runs' lines, stands for one entry per run, as the browser draws it).
+# Every figure's legend entries in drawing order, as the browser draws them: a legend item
+# labelled by a data field (the pinned runs' lines) stands for one entry per run; an item hidden
+# (its curve is, dashboard.legend_swatches) is not drawn.
 LEGENDS_JS = """() => {
   const out = {};
   for (const doc of (window.Bokeh ? window.Bokeh.documents : [])) {
@@ -51,7 +52,7 @@ LEGENDS_JS = """() => {
       if (model.type !== "Figure" || !model.title) continue;
       const legends = [...model.center, ...model.below].filter(m => m.type === "Legend");
       out[model.title.text] = legends.flatMap(legend => legend.items
-        .filter(item => item.renderers.some(r => r.visible))
+        .filter(item => item.visible)
         .flatMap(item => item.get_labels_list_from_label_prop()));
     }
   }

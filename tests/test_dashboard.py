@@ -22,15 +22,17 @@ import numpy as np
 import panel as pn
 import param
 import pytest
+from bokeh.core.property.vectorization import Field, Value
 from bokeh.document import Document
 from panel.io.resources import set_resource_mode
 from panel.io.state import set_curdoc
 
-from dashboard import key_numbers, parsed, plot_panes, plots
+from dashboard import key_numbers, legend_swatches, parsed, plot_panes, plots
 from dashboard import runs as runs_module
 from dashboard.app import Dashboard
 from dashboard.export import main as export_main
 from dashboard.inputs import HIDDEN, PRIMARY, SWITCHES
+from dashboard.legend_swatches import SWATCH_TAG
 from dashboard.longterm_view import LONGTERM_PLOTS
 from dashboard.report import package_version, report_html
 from dashboard.scheduler import RunCancelled
@@ -666,6 +668,42 @@ def test_the_other_model_is_computed_after_the_results_are_shown(dashboard, monk
     assert not dashboard.runs.companion.busy
 
 
+def test_a_new_run_replaces_no_data_that_a_legend_reaches(cache, cheap_scenario):
+    """BokehJS draws a legend's entries again when any model they reach changes. The entries
+    named by a value point at swatch renderers (hidden, one row of data, their curve's glyph
+    style), so none of the data that a new run replaces is reached from a legend; the pinned
+    runs' entry keeps its renderer, whose data a new run leaves as it is."""
+    board = Dashboard(scenario=cheap_scenario(), preset="single_bogie", cache=cache)
+    session_doc = Document()
+    with set_curdoc(session_doc):
+        board.template().server_doc(session_doc)
+        board.refresh()
+        board.whatif.pin_button.clicks += 1
+        figures = [_drawn_plot(pane).state for pane in board.passage.plots.panes.values()]
+        sources = {s for figure in figures for s in figure.select(bokeh.models.ColumnDataSource)}
+        data_before = {source: source.data for source in sources}
+        board.scenario.train.speed_kmh += 10.0
+        replaced = {source for source, data in data_before.items() if source.data is not data}
+    assert replaced  # the new run's curves
+    for figure in figures:
+        (legend,) = figure.legend
+        assert not replaced & legend.references(), figure.title.text
+        labels = [item.label for item in legend.items]
+        assert any(isinstance(label, Field) for label in labels), figure.title.text  # pinned
+        assert Value(CURRENT_LABEL) in labels, figure.title.text
+        for item in legend.items:
+            if not isinstance(item.label, Value):
+                continue
+            assert item.visible
+            for swatch in item.renderers:
+                owner = legend_swatches._owner(swatch)
+                assert owner is not swatch and owner in figure.renderers and owner.visible
+                assert SWATCH_TAG in swatch.tags and not swatch.visible
+                assert {len(column) for column in swatch.data_source.data.values()} == {1}
+                style = owner.glyph.properties_with_values(include_defaults=False)
+                assert swatch.glyph.properties_with_values(include_defaults=False) == style
+
+
 def test_a_failed_comparison_run_leaves_no_legend_entry_until_the_next_one(
     cache, cheap_scenario, monkeypatch
 ):
@@ -681,8 +719,13 @@ def test_a_failed_comparison_run_leaves_no_legend_entry_until_the_next_one(
         board.refresh()
         figure = _drawn_plot(board.passage.plots.panes["depth_profile"]).state
 
-        def legend():
-            return {item.label["value"] for legend in figure.legend for item in legend.items}
+        def legend():  # the entries drawn
+            return {
+                item.label["value"]
+                for legend in figure.legend
+                for item in legend.items
+                if item.visible
+            }
 
         assert "2.5D moving load" in legend()
         compute = board.runs.companion._compute
@@ -694,7 +737,7 @@ def test_a_failed_comparison_run_leaves_no_legend_entry_until_the_next_one(
         board.scenario.soil.youngs_modulus = 11e6
     assert board.runs.comparison_state == "shown"
     assert "2.5D moving load" in legend()
-    assert all(renderer.visible for renderer in figure.renderers)
+    assert all(renderer.visible for renderer in figure.renderers if SWATCH_TAG not in renderer.tags)
 
 
 def test_the_ground_plots_follow_a_change_to_the_half_space(cache, cheap_scenario):
@@ -783,7 +826,7 @@ def test_a_run_reaches_a_served_page_in_one_batch(cache, cheap_scenario, monkeyp
 
 def _figure_content(figure) -> dict:
     """What a Bokeh figure shows: every glyph's data (lists), in drawing order, and its axis
-    ranges."""
+    ranges (a legend's swatch renderers are hidden and hold no data of the plot's)."""
 
     def listed(values):
         return (
@@ -794,6 +837,7 @@ def _figure_content(figure) -> dict:
         "data": [
             {name: listed(values) for name, values in renderer.data_source.data.items()}
             for renderer in figure.renderers
+            if SWATCH_TAG not in renderer.tags
         ],
         "x": (figure.x_range.start, figure.x_range.end),
         "y": (figure.y_range.start, figure.y_range.end),
