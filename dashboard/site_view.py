@@ -24,7 +24,7 @@ import param
 from bokeh.models.widgets.tables import HTMLTemplateFormatter
 
 from dashboard.limits import BOREHOLE_CSV_BYTES, refuse_oversized
-from dashboard.plots import MM, PLOT_OPTIONS, PlotSpec, scenario_of
+from dashboard.plots import LEGEND_SPACING_PX, MM, PLOT_OPTIONS, PlotSpec, scenario_of
 from model.params import LAYER_PROPERTIES, Layer, Site
 from model.params.borehole import borehole_csv, parse_borehole_csv
 from model.params.display import LAYER_PATH, display_label, display_unit
@@ -42,7 +42,11 @@ YEAR_CHOICES = (0.1, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0)
 """Years the excess pore pressure can be shown at (those within the service time)."""
 DEFAULT_YEARS = (1.0, 10.0)
 """Shown by default, with the last year of service."""
-_LEGEND = {"legend_position": "bottom", "legend_cols": 3}
+_LEGEND = {
+    "legend_position": "bottom",
+    "legend_cols": 3,
+    "legend_opts": {"spacing": LEGEND_SPACING_PX},  # Bokeh's 3 px ran a label into the next line
+}
 
 
 def layer_boundary_lines(results: Results) -> hv.HLines:

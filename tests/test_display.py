@@ -14,7 +14,7 @@ import param
 import pytest
 from holoviews.streams import Pipe
 
-from dashboard import axes, key_numbers, plots
+from dashboard import axes, key_numbers, plots, site_view
 from dashboard.app import Dashboard
 from dashboard.report import build_report, inputs_html
 from dashboard.study_plots import band_plot, depth_envelope_plot, partial_note, study_bands
@@ -87,6 +87,15 @@ def test_legend_entries_side_by_side_keep_apart():
     (legend,) = hv.render(overlay.opts(**options), backend="bokeh").legend
     assert legend.ncols == options["legend_cols"] >= 2
     assert legend.spacing == plots.LEGEND_SPACING_PX >= 10
+
+
+def test_the_long_term_legends_keep_their_entries_apart(cheap_scenario):
+    """The same defect on the long-term tab: "u after 10 y– – u_g after 20 y" in the excess
+    pore-pressure plot's legend of three columns."""
+    results = run(cheap_scenario())
+    for spec in site_view.SITE_PLOTS:
+        for legend in hv.render(spec.draw(results), backend="bokeh").legend:
+            assert legend.spacing == plots.LEGEND_SPACING_PX, spec.key
 
 
 def test_a_legend_stays_below_the_axes_through_updates():
