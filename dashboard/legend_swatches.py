@@ -30,7 +30,7 @@ def swatches_apart(figure, item) -> None:
     """
     if not isinstance(item.label, Value):
         return
-    owners = [_owner(renderer) for renderer in item.renderers]
+    owners = list(dict.fromkeys(_owner(renderer) for renderer in item.renderers))  # once each
     swatches = [_swatch(figure, owner) for owner in owners]
     if list(item.renderers) != swatches:
         item.renderers = swatches
